@@ -1,0 +1,47 @@
+# Sluice: the two commands of the README's Quick start, and a few more.
+#   make demo   install what is missing, build, run the demo
+#   make test   install what is missing, build, run the whole suite (ctest)
+#   make bench  run the stream benchmarks (bench/results/streams.json)
+#   make asan   the suite again in an ASan+UBSan build of the host code
+BUILD ?= build
+ASAN_BUILD ?= build-asan
+MESON_FLAGS ?=
+
+.PHONY: all deps build demo test bench asan install clean
+
+all: build
+
+deps:
+	@sh tools/install-deps.sh
+
+$(BUILD)/build.ninja: | deps
+	meson setup $(BUILD) $(MESON_FLAGS)
+
+build: deps $(BUILD)/build.ninja
+	ninja -C $(BUILD)
+
+demo: build
+	$(BUILD)/apps/sluice-info
+
+test: build
+	ctest --test-dir $(BUILD) --output-on-failure
+
+bench: build
+	$(BUILD)/bench/bench_streams --out bench/results/streams.json
+
+$(ASAN_BUILD)/build.ninja: | deps
+	meson setup $(ASAN_BUILD) -Dbuildtype=debug -Db_sanitize=address,undefined \
+	    -Db_lundef=false $(MESON_FLAGS)
+
+asan: deps $(ASAN_BUILD)/build.ninja
+	ninja -C $(ASAN_BUILD)
+	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+	LSAN_OPTIONS=suppressions=$(CURDIR)/tools/lsan.supp:print_suppressions=0 \
+	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+	    ctest --test-dir $(ASAN_BUILD) --output-on-failure
+
+install: build
+	meson install -C $(BUILD)
+
+clean:
+	rm -rf $(BUILD) $(ASAN_BUILD)

@@ -1,0 +1,202 @@
+/*
+ * sluice.cl: the kernel-side half of Sluice. A kernel file starts with
+ *
+ *     #include "sluice.cl"
+ *
+ * (served from the copy embedded in the library), and writes stream kernels as
+ * plain OpenCL kernels whose parameter list starts with SLUICE_PARAMS and whose
+ * body is a SLUICE_FOR_EACH loop, run once per input record with the record's
+ * index in the named variable:
+ *
+ *     __kernel void split_sign(SLUICE_PARAMS, global const float *in,
+ *                              global float *neg, global float *pos)
+ *     {
+ *         SLUICE_FOR_EACH(i) {
+ *             float x = in[i];
+ *             SLUICE_EMIT_IF(0, neg, x, x < 0.0f);  // conditional output slot 0
+ *             SLUICE_EMIT_IF(1, pos, x, x >= 0.0f); // conditional output slot 1
+ *             SLUICE_COUNT(0, x == 0.0f);           // counter 0 counts zeros
+ *         }
+ *     }
+ *
+ * How it runs (and why). On a CPU the fastest way to write a variable number of
+ * records is the way a C programmer would: each work-item walks a contiguous
+ * chunk of records, first counting what it will emit (pass 0), then reserving
+ * room for the whole chunk with one global atomic per output and writing the
+ * records (pass 1). This is Purcell's conditional output stream (thesis 3.1.2)
+ * without the per-record atomics that make it slow: at most one global atomic
+ * per chunk and output. For ORDERED outputs the counts go to a scratch array
+ * instead, the host scans it, and a second launch writes at the scanned
+ * offsets, so records keep the order of the input.
+ *
+ * Rules for a body that emits:
+ *   - It runs twice per record (count pass, write pass) and must emit the same
+ *     records both times: it must be deterministic and must not depend on what
+ *     it wrote itself. Put heavy work in a kernel without conditional outputs,
+ *     or guard other writes with `if (SLUICE_WRITING)`.
+ *   - Use `continue` to skip the rest of a record. Never `return` or `break`:
+ *     they would skip the reservation and the counter flush.
+ *   - Emit with constant slot numbers (0 .. SLUICE_MAX_OUTPUTS-1).
+ */
+#ifndef SLUICE_CL_INCLUDED
+#define SLUICE_CL_INCLUDED
+
+#define SLUICE_MAX_OUTPUTS 8
+#define SLUICE_MAX_COUNTERS 8
+#define SLUICE_NONE 0xffffffffu
+
+/* Launch parameters filled in by the host runtime (runtime/src/kernel.c keeps
+ * the same layout). All fields are uint so host and device agree on layout. */
+typedef struct sluice_launch_ {
+    uint n_fixed;        /* input length when the host knows it, else SLUICE_NONE */
+    uint in_var;         /* index of the input length in the variable pool */
+    uint chunk;          /* records per work-item */
+    uint mode;           /* 0: one launch, 1: ordered count launch, 2: ordered write */
+    uint first_pass;     /* 0 when the count pass runs, else 1 */
+    uint ordered_mask;   /* bit k: output k is ordered */
+    uint out_mask;       /* bit k: output k is bound */
+    uint counter_var;    /* first counter in the pool, or SLUICE_NONE */
+    uint n_counters;     /* counters bound */
+    uint prof_var;       /* profile variables (records in, out[8]) or SLUICE_NONE */
+    uint stride;         /* chunks + 1: scratch row length per ordered output */
+    uint reserved;       /* keeps the struct a multiple of 8 bytes */
+    uint out_var[SLUICE_MAX_OUTPUTS]; /* output lengths in the pool */
+    uint out_cap[SLUICE_MAX_OUTPUTS]; /* output capacities (records) */
+} sluice_launch_;
+
+/* Per-work-item state of one launch. */
+typedef struct sluice_state_ {
+    uint begin, end; /* the chunk: records [begin, end) */
+    uint pass;       /* 0: count, 1: write */
+    uint chunk_id;
+    uint cnt[SLUICE_MAX_OUTPUTS]; /* records this chunk emits, per output */
+    uint pos[SLUICE_MAX_OUTPUTS]; /* next slot to write */
+    uint lim[SLUICE_MAX_OUTPUTS]; /* end of the reserved range, clamped to capacity */
+    uint ctr[SLUICE_MAX_COUNTERS];
+} sluice_state_;
+
+inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
+                          const sluice_launch_ *L)
+{
+    uint n = L->n_fixed != SLUICE_NONE ? L->n_fixed : vars[L->in_var];
+    uint id = (uint)get_global_id(0);
+    ulong b = (ulong)id * L->chunk;
+    s->chunk_id = id;
+    s->begin = (uint)min(b, (ulong)n);
+    s->end = (uint)min(b + L->chunk, (ulong)n);
+    s->pass = L->first_pass;
+    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+        s->cnt[k] = 0;
+        s->pos[k] = 0;
+        s->lim[k] = 0;
+        if (L->mode == 2 && ((L->ordered_mask >> k) & 1u)) {
+            /* Write launch of an ordered output: offsets were scanned. */
+            uint a = scratch[k * L->stride + id], e = scratch[k * L->stride + id + 1];
+            s->cnt[k] = L->first_pass ? e - a : 0u; /* else recounted in pass 0 */
+            s->pos[k] = a;
+            s->lim[k] = min(e, L->out_cap[k]);
+        }
+    }
+    for (uint c = 0; c < SLUICE_MAX_COUNTERS; ++c)
+        s->ctr[c] = 0;
+}
+
+/* Runs between the passes and after the last one. */
+inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scratch,
+                         const sluice_launch_ *L)
+{
+    if (s->pass == 0) {
+        for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+            if (!((L->out_mask >> k) & 1u))
+                continue;
+            int ordered = (L->ordered_mask >> k) & 1u;
+            if (L->mode == 1) {
+                if (ordered)
+                    scratch[k * L->stride + s->chunk_id] = s->cnt[k];
+            } else if (!ordered) {
+                /* One global atomic per chunk and output. */
+                uint p = s->cnt[k] ? atomic_add(&vars[L->out_var[k]], s->cnt[k]) : 0u;
+                s->pos[k] = p;
+                s->lim[k] = (uint)min((ulong)p + s->cnt[k], (ulong)L->out_cap[k]);
+            }
+        }
+    } else {
+        for (uint c = 0; c < L->n_counters; ++c)
+            if (s->ctr[c])
+                atomic_add(&vars[L->counter_var + c], s->ctr[c]);
+        if (L->prof_var != SLUICE_NONE) {
+            if (s->end > s->begin)
+                atomic_add(&vars[L->prof_var], s->end - s->begin);
+            for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+                if (s->cnt[k])
+                    atomic_add(&vars[L->prof_var + 1 + k], s->cnt[k]);
+        }
+    }
+    s->pass = (L->mode == 1) ? 2u : s->pass + 1u;
+}
+
+/* The hidden parameters every stream kernel takes first. The host numbers the
+ * kernel's own parameters from 0, starting after these. */
+#define SLUICE_PARAMS                                                                              \
+    global uint *sluice_vars_, global uint *sluice_scratch_, const sluice_launch_ sluice_L_
+
+/* Loops over this work-item's records, with the record index in `id`. The
+ * statement (usually a block) that follows is the body. Code before it runs
+ * once per work-item; code after it must not emit or count. */
+#define SLUICE_FOR_EACH(id)                                                                        \
+    sluice_state_ sluice_s_;                                                                       \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_);                          \
+    for (; sluice_s_.pass < 2u; sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_)) \
+        for (uint id = sluice_s_.begin; id < sluice_s_.end; ++id)
+
+/* True in the pass that writes (always true for kernels without conditional
+ * outputs). Guard mapped writes with it to avoid doing them twice. */
+#define SLUICE_WRITING (sluice_s_.pass == 1u)
+
+/* Reserves the next record of conditional output `slot` when `cond` is true
+ * and evaluates to the index to write it at. Write the record there only
+ * `if (SLUICE_WRITING)`; the index is always safe to write: when cond is
+ * false, or in the count pass, it is a slot that a later record of the same
+ * chunk overwrites or the stream's spare record past its capacity. Use this
+ * for records written field by field. */
+inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
+{
+    if (s->pass == 0u) {
+        s->cnt[slot] += c;
+        return cap;
+    }
+    uint p = s->pos[slot];
+    s->pos[slot] = p + c;
+    return p < s->lim[slot] ? p : cap;
+}
+#define SLUICE_EMIT_INDEX(slot, cond)                                                              \
+    sluice_emit_index_(&sluice_s_, (slot), (cond) ? 1u : 0u, sluice_L_.out_cap[slot])
+
+/* Emits `value` to conditional output `slot`, whose records are in `buf`,
+ * when `cond` is true. Branch-free: when cond is false the value is written
+ * to a slot that a later record of the same chunk overwrites (or to the
+ * stream's spare record past its capacity), and the position does not move. */
+#define SLUICE_EMIT_IF(slot, buf, value, cond)                                                     \
+    do {                                                                                           \
+        uint sluice_at_ = SLUICE_EMIT_INDEX(slot, cond);                                           \
+        if (SLUICE_WRITING)                                                                        \
+            (buf)[sluice_at_] = (value);                                                           \
+    } while (0)
+
+/* Emits `value` to conditional output `slot` unconditionally. A body may emit
+ * several records per input (a bounded number) by emitting several times. */
+#define SLUICE_EMIT(slot, buf, value) SLUICE_EMIT_IF(slot, buf, value, 1)
+
+/* Adds `amount` (a uint) to counter `i` of the bound counter set. Aggregated
+ * per work-item chunk: one global atomic per chunk and counter. */
+#define SLUICE_COUNT(i, amount)                                                                    \
+    do {                                                                                           \
+        if (sluice_s_.pass == 1u)                                                                  \
+            sluice_s_.ctr[i] += (uint)(amount);                                                    \
+    } while (0)
+
+/* The number of input records of this launch. */
+#define SLUICE_LENGTH                                                                              \
+    (sluice_L_.n_fixed != SLUICE_NONE ? sluice_L_.n_fixed : sluice_vars_[sluice_L_.in_var])
+
+#endif /* SLUICE_CL_INCLUDED */

@@ -1,0 +1,418 @@
+/*
+ * Sluice: stream programming on OpenCL, in the model of Purcell's thesis
+ * ("Ray Tracing on a Stream Processor", 2004, ch. 3 and 4.1.2).
+ *
+ * The whole host-side runtime API is in this header. The stream algorithms
+ * (scan, split, sort, ...) have their own header, <sluice/streams.h>.
+ *
+ * Vocabulary
+ *   context   one OpenCL device, one in-order queue, the profiler and a pool of
+ *             small device-side variables (stream lengths and counters).
+ *   stream    a device buffer of fixed-size records with a capacity and a
+ *             length. The length lives on the device, so a kernel with
+ *             conditional outputs can set it and the next pass can read it
+ *             without a round trip to the host.
+ *   program   OpenCL C source (a user's file or string, or one of the kernels
+ *             embedded in the library), built lazily the first time one of its
+ *             kernels is needed, and only once.
+ *   kernel    one __kernel of a program whose parameters start with
+ *             SLUICE_PARAMS and whose body is a SLUICE_FOR_EACH loop (see the
+ *             kernel-side header sluice.cl). A launch runs the loop body once
+ *             per record of its single input stream.
+ *   output    a conditional output stream of a kernel: each input record emits
+ *             zero or more records into it with SLUICE_EMIT / SLUICE_EMIT_IF.
+ *             ORDERED outputs keep input order (stable); UNORDERED outputs
+ *             append whole chunks in any order (one global atomic per chunk).
+ *   counters  named uint32 counters that kernels bump with SLUICE_COUNT: the
+ *             occlusion query of this world (Purcell 4.1.2).
+ *   loop      runs a pass (a few launches) again and again while a counter or a
+ *             stream length is non-zero, optionally asking an oracle which pass
+ *             to run next from the current counts.
+ *
+ * Conventions
+ *   Every function that can fail returns a sluice_status; SLUICE_OK is 0.
+ *   On failure the context keeps a readable message: sluice_context_error().
+ *   Nothing in the library aborts or exits. Handles are opaque and come in
+ *   create/destroy pairs; destroy functions accept NULL. Objects are not
+ *   thread-safe: use one context per thread, or lock around it.
+ */
+#ifndef SLUICE_SLUICE_H
+#define SLUICE_SLUICE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Status codes returned by every fallible function. */
+typedef enum sluice_status {
+    SLUICE_OK = 0,
+    SLUICE_ERROR_INVALID_ARGUMENT = 1, /**< a NULL handle, a bad index or size */
+    SLUICE_ERROR_NO_DEVICE = 2,        /**< no OpenCL device matched */
+    SLUICE_ERROR_OUT_OF_MEMORY = 3,    /**< host or device allocation failed */
+    SLUICE_ERROR_BUILD = 4,            /**< OpenCL C compile error; see the log */
+    SLUICE_ERROR_NOT_FOUND = 5,        /**< no such kernel, file or name */
+    SLUICE_ERROR_IO = 6,               /**< a file could not be read or written */
+    SLUICE_ERROR_OVERFLOW = 7,         /**< an output stream ran out of capacity */
+    SLUICE_ERROR_OPENCL = 8,           /**< an OpenCL call failed */
+    SLUICE_ERROR_LIMIT = 9             /**< a fixed limit (pass limit, pool size) was hit */
+} sluice_status;
+
+/** A short English name for a status code ("invalid argument", ...). */
+const char *sluice_status_string(sluice_status status);
+
+/* ------------------------------------------------------------------ */
+/* Devices and contexts                                                */
+/* ------------------------------------------------------------------ */
+
+/** What sluice_devices_list() reports about one OpenCL device. */
+typedef struct sluice_device_info {
+    char platform[128];          /**< platform name */
+    char name[128];              /**< device name */
+    char version[128];           /**< OpenCL C version string */
+    int is_cpu;                  /**< 1 for CL_DEVICE_TYPE_CPU */
+    unsigned compute_units;      /**< CL_DEVICE_MAX_COMPUTE_UNITS */
+    size_t max_work_group_size;  /**< CL_DEVICE_MAX_WORK_GROUP_SIZE */
+    uint64_t global_mem_bytes;   /**< CL_DEVICE_GLOBAL_MEM_SIZE */
+    uint64_t max_alloc_bytes;    /**< CL_DEVICE_MAX_MEM_ALLOC_SIZE */
+    uint64_t local_mem_bytes;    /**< CL_DEVICE_LOCAL_MEM_SIZE */
+} sluice_device_info;
+
+/**
+ * Lists the OpenCL devices of all platforms. Writes up to `max` entries into
+ * `out` (which may be NULL when max is 0) and the total number found into
+ * `*count`. Returns SLUICE_ERROR_NO_DEVICE when there is no platform at all.
+ */
+sluice_status sluice_devices_list(sluice_device_info *out, size_t max, size_t *count);
+
+/** Options for sluice_context_create(); zero-initialise, then set fields. */
+typedef struct sluice_context_options {
+    /** Case-insensitive substring of "platform name / device name" that picks
+     *  the device. NULL: the environment variable SLUICE_DEVICE, and if that
+     *  is unset, the first CPU device, then the first device of any type. */
+    const char *device;
+    /** Non-zero: time every launch with OpenCL events and keep per-kernel
+     *  statistics (sluice_profile_print). Also enabled by SLUICE_PROFILE=1. */
+    int profile;
+    /** Records each work-item handles in one launch (0: chosen per launch
+     *  from the stream size). Larger chunks mean fewer atomics. */
+    unsigned chunk;
+} sluice_context_options;
+
+typedef struct sluice_context sluice_context;
+
+/**
+ * Creates a context on one device. `options` may be NULL. On failure `*out`
+ * is NULL and, when `error` is not NULL, a message of at most `error_size`
+ * bytes (NUL-terminated) says why.
+ */
+sluice_status sluice_context_create(const sluice_context_options *options, sluice_context **out,
+                                    char *error, size_t error_size);
+
+/** Waits for all queued work, then frees the context. Every stream, program,
+ *  kernel, counter set and loop made from it must be destroyed first. */
+void sluice_context_destroy(sluice_context *ctx);
+
+/** The message of the last error seen by this context ("" when none). */
+const char *sluice_context_error(const sluice_context *ctx);
+
+/** Describes the context's device. */
+sluice_status sluice_context_device(const sluice_context *ctx, sluice_device_info *info);
+
+/** Blocks until everything queued on the context has finished. */
+sluice_status sluice_context_finish(sluice_context *ctx);
+
+/** The underlying OpenCL objects, for interoperation (cl_context,
+ *  cl_command_queue and cl_device_id, returned as void* so this header does
+ *  not need the OpenCL headers). The context keeps ownership. */
+void *sluice_context_cl_context(sluice_context *ctx);
+void *sluice_context_cl_queue(sluice_context *ctx);
+void *sluice_context_cl_device(sluice_context *ctx);
+
+/* ------------------------------------------------------------------ */
+/* Streams                                                             */
+/* ------------------------------------------------------------------ */
+
+typedef struct sluice_stream sluice_stream;
+
+/**
+ * Creates a stream of `capacity` records of `record_size` bytes, with length
+ * 0. Capacity 0 is allowed (grow it later). A request larger than the device
+ * can allocate fails with SLUICE_ERROR_OUT_OF_MEMORY.
+ */
+sluice_status sluice_stream_create(sluice_context *ctx, size_t record_size, size_t capacity,
+                                   sluice_stream **out);
+
+/** Frees the stream (NULL is fine). */
+void sluice_stream_destroy(sluice_stream *stream);
+
+/** Record size in bytes. */
+size_t sluice_stream_record_size(const sluice_stream *stream);
+
+/** Capacity in records. */
+size_t sluice_stream_capacity(const sluice_stream *stream);
+
+/** Reads the current length. When the length lives on the device this waits
+ *  for the work queued before it (not for work queued after). */
+sluice_status sluice_stream_length(sluice_stream *stream, size_t *length);
+
+/** Queues setting the length to `length` (at most the capacity). The records
+ *  are not touched. */
+sluice_status sluice_stream_set_length(sluice_stream *stream, size_t length);
+
+/** Queues setting the length to 0. */
+sluice_status sluice_stream_clear(sluice_stream *stream);
+
+/** Copies `count` records from host memory into the stream and sets its
+ *  length to `count`. Fails with SLUICE_ERROR_OVERFLOW if count > capacity. */
+sluice_status sluice_stream_upload(sluice_stream *stream, const void *records, size_t count);
+
+/** Copies the stream's records (at most `max` of them) to host memory and
+ *  writes their number to `*count` (may be NULL). Blocks until done. Returns
+ *  SLUICE_ERROR_OVERFLOW if an unordered or ordered output overflowed (length
+ *  above capacity); the first `capacity` records are still copied. */
+sluice_status sluice_stream_download(sluice_stream *stream, void *records, size_t max,
+                                     size_t *count);
+
+/** Reallocates to at least `capacity` records, keeping records and length.
+ *  Never shrinks. */
+sluice_status sluice_stream_grow(sluice_stream *stream, size_t capacity);
+
+/** Exchanges the contents (buffers, lengths, capacities) of two streams of the
+ *  same record size: the ping-pong of a multipass loop. Kernels that bound
+ *  either stream see the swap at their next launch. */
+sluice_status sluice_stream_swap(sluice_stream *a, sluice_stream *b);
+
+/** The cl_mem of the records (as void*). It holds capacity+1 records: the
+ *  last one is scratch that branch-free emission may overwrite. */
+void *sluice_stream_cl_mem(sluice_stream *stream);
+
+/* ------------------------------------------------------------------ */
+/* Programs                                                            */
+/* ------------------------------------------------------------------ */
+
+typedef struct sluice_program sluice_program;
+
+/**
+ * Creates a program from OpenCL C source text. `name` is used in compiler
+ * messages ("name:LINE:COL: error ..."); `options` are extra build options
+ * (e.g. "-DTILE=8"), may be NULL. A line `#include "sluice.cl"` (or
+ * <sluice.cl>) is served from the library's embedded copy of the kernel-side
+ * header; nothing is read from disk. The source is compiled lazily, on the
+ * first sluice_kernel_create() or an explicit sluice_program_build().
+ */
+sluice_status sluice_program_create_source(sluice_context *ctx, const char *name,
+                                           const char *source, const char *options,
+                                           sluice_program **out);
+
+/** Like sluice_program_create_source(), reading the source from `path`. A
+ *  missing file gives SLUICE_ERROR_IO naming the path. */
+sluice_status sluice_program_create_file(sluice_context *ctx, const char *path,
+                                         const char *options, sluice_program **out);
+
+/** Frees the program. Kernels made from it must be destroyed first. */
+void sluice_program_destroy(sluice_program *program);
+
+/** Compiles now if not yet compiled. A compile error returns
+ *  SLUICE_ERROR_BUILD; the compiler's log (with file and line) is then in
+ *  sluice_program_build_log() and the context's error message. */
+sluice_status sluice_program_build(sluice_program *program);
+
+/** The compiler log of the last build ("" before a build). */
+const char *sluice_program_build_log(const sluice_program *program);
+
+/* ------------------------------------------------------------------ */
+/* Kernels over streams                                                */
+/* ------------------------------------------------------------------ */
+
+typedef struct sluice_kernel sluice_kernel;
+typedef struct sluice_counters sluice_counters;
+
+/** How a conditional output stream receives records. */
+typedef enum sluice_output_mode {
+    /** Records keep the order of the input records that emitted them. Costs a
+     *  counting launch and a small scan before the writing launch. */
+    SLUICE_ORDERED = 0,
+    /** Each chunk of input appends its records with one global atomic; order
+     *  within a chunk is kept, order between chunks is not. */
+    SLUICE_UNORDERED = 1
+} sluice_output_mode;
+
+/** Most conditional outputs per kernel, and most counters per counter set. */
+#define SLUICE_MAX_OUTPUTS 8
+#define SLUICE_MAX_COUNTERS 8
+
+/**
+ * Makes a launchable kernel from a program (building it if needed). The
+ * kernel's parameters must start with SLUICE_PARAMS (sluice.cl). Argument
+ * indices below count the parameters written after SLUICE_PARAMS, from 0.
+ */
+sluice_status sluice_kernel_create(sluice_program *program, const char *name,
+                                   sluice_kernel **out);
+
+/** Frees the kernel (NULL is fine). */
+void sluice_kernel_destroy(sluice_kernel *kernel);
+
+/** Binds the single input stream to argument `arg`: the launch runs once per
+ *  record of it (the SLUICE_FOR_EACH index runs 0 .. length-1). */
+sluice_status sluice_kernel_set_input(sluice_kernel *kernel, unsigned arg, sluice_stream *stream);
+
+/** Binds conditional output `slot` (0 .. SLUICE_MAX_OUTPUTS-1, the first
+ *  argument of SLUICE_EMIT) to `stream` at argument `arg`. Records are
+ *  appended after the stream's current length. */
+sluice_status sluice_kernel_set_output(sluice_kernel *kernel, unsigned arg, unsigned slot,
+                                       sluice_stream *stream, sluice_output_mode mode);
+
+/** Binds a stream's records to argument `arg` with no stream role: a gather
+ *  source or a buffer indexed by the record index. If `map_output` is non-zero the
+ *  stream's length is set to the input length after each launch (output i
+ *  comes from input i). */
+sluice_status sluice_kernel_set_stream(sluice_kernel *kernel, unsigned arg, sluice_stream *stream,
+                                       int map_output);
+
+/** Sets a plain argument (a scalar, a vector or a struct) by value. */
+sluice_status sluice_kernel_set_arg(sluice_kernel *kernel, unsigned arg, size_t size,
+                                    const void *value);
+
+/** Makes SLUICE_COUNT(i, ...) in this kernel add to counter i of `counters`
+ *  (NULL unbinds). */
+sluice_status sluice_kernel_set_counters(sluice_kernel *kernel, sluice_counters *counters);
+
+/** Queues one launch over the input stream. Returns when queued, not when
+ *  done. Fails if an argument is unset or an output is too small to ever
+ *  hold the result of a mapped output. */
+sluice_status sluice_kernel_launch(sluice_kernel *kernel);
+
+/** Queues one launch over `count` records without an input stream (a
+ *  generator such as eye-ray generation): the record index runs 0 .. count-1. */
+sluice_status sluice_kernel_launch_count(sluice_kernel *kernel, size_t count);
+
+/** The kernel's name. */
+const char *sluice_kernel_name(const sluice_kernel *kernel);
+
+/* ------------------------------------------------------------------ */
+/* Counters                                                            */
+/* ------------------------------------------------------------------ */
+
+/** Creates `count` (1 .. SLUICE_MAX_COUNTERS) counters, all 0. `names` may be
+ *  NULL (names "c0", "c1", ...) or hold `count` strings. */
+sluice_status sluice_counters_create(sluice_context *ctx, size_t count, const char *const *names,
+                                     sluice_counters **out);
+
+/** Frees the counter set (NULL is fine). */
+void sluice_counters_destroy(sluice_counters *counters);
+
+/** Number of counters in the set. */
+size_t sluice_counters_count(const sluice_counters *counters);
+
+/** The index of the counter called `name`, or -1. */
+int sluice_counters_index(const sluice_counters *counters, const char *name);
+
+/** Queues setting every counter to 0. */
+sluice_status sluice_counters_reset(sluice_counters *counters);
+
+/** Reads all counters into `values` (sluice_counters_count() entries). Waits
+ *  only for the work queued before the call. */
+sluice_status sluice_counters_read(sluice_counters *counters, uint32_t *values);
+
+/* ------------------------------------------------------------------ */
+/* Multipass loops (Purcell 4.1.2)                                     */
+/* ------------------------------------------------------------------ */
+
+/** Returned by an oracle to end the loop. */
+#define SLUICE_LOOP_STOP 0xffffffffu
+
+/** Queues one pass. `choice` is what the oracle picked (0 without one).
+ *  Return SLUICE_OK to go on; any other status ends the loop with it. */
+typedef sluice_status (*sluice_pass_fn)(void *user, unsigned pass, unsigned choice);
+
+/** Picks the next pass from the watched values (stream lengths first, then
+ *  counters, in the order given in the descriptor). Return a choice for the
+ *  pass function, or SLUICE_LOOP_STOP. */
+typedef unsigned (*sluice_oracle_fn)(void *user, unsigned pass, const uint32_t *values,
+                                     size_t count);
+
+/** What a loop runs and watches. Zero-initialise, then set fields. */
+typedef struct sluice_loop_desc {
+    sluice_pass_fn pass;                /**< required */
+    sluice_oracle_fn oracle;            /**< optional */
+    void *user;                         /**< handed to pass and oracle */
+    sluice_stream *const *streams;      /**< lengths to watch (may be NULL) */
+    size_t stream_count;                /**< how many */
+    sluice_counters *counters;          /**< counters to watch (may be NULL) */
+    int reset_counters;                 /**< non-zero: zero them before each pass */
+    unsigned max_passes;                /**< 0: 100000 */
+} sluice_loop_desc;
+
+/** Per-pass statistics kept by a loop. */
+typedef struct sluice_pass_stats {
+    unsigned choice;             /**< what the pass function was given */
+    uint32_t values[16];         /**< watched values after the pass (first 16) */
+    double seconds;              /**< host wall time from queueing to values read */
+} sluice_pass_stats;
+
+typedef struct sluice_loop sluice_loop;
+
+/** Creates a loop from a descriptor (copied; the arrays it points to must
+ *  outlive the loop). */
+sluice_status sluice_loop_create(sluice_context *ctx, const sluice_loop_desc *desc,
+                                 sluice_loop **out);
+
+/** Frees the loop (NULL is fine). */
+void sluice_loop_destroy(sluice_loop *loop);
+
+/**
+ * Runs the loop: before each pass, the oracle (if any) picks a choice from the
+ * watched values of the previous pass (all values are read before the first
+ * pass too); without an oracle the loop goes on while any watched value is
+ * non-zero. Stops with SLUICE_ERROR_LIMIT after max_passes passes. Per-pass
+ * statistics of the last run are kept until the next run.
+ */
+sluice_status sluice_loop_run(sluice_loop *loop);
+
+/** Number of passes of the last run. */
+unsigned sluice_loop_pass_count(const sluice_loop *loop);
+
+/** Statistics of pass `index` of the last run (NULL if out of range). */
+const sluice_pass_stats *sluice_loop_pass(const sluice_loop *loop, unsigned index);
+
+/* ------------------------------------------------------------------ */
+/* Profiling                                                           */
+/* ------------------------------------------------------------------ */
+
+/** Per-kernel totals kept when profiling is on. */
+typedef struct sluice_profile_entry {
+    char name[64];          /**< kernel name */
+    uint64_t launches;      /**< launches queued (an ordered launch counts once) */
+    uint64_t records_in;    /**< input records processed */
+    uint64_t records_out;   /**< records emitted to conditional outputs */
+    uint64_t bytes;         /**< input and emitted bytes */
+    double device_seconds;  /**< summed OpenCL event time */
+} sluice_profile_entry;
+
+/** Non-zero if the context profiles launches. */
+int sluice_profile_enabled(const sluice_context *ctx);
+
+/** Number of kernels with statistics (waits for queued work first). */
+size_t sluice_profile_count(sluice_context *ctx);
+
+/** Entry `index` (0 .. count-1), sorted by first launch. */
+sluice_status sluice_profile_get(sluice_context *ctx, size_t index, sluice_profile_entry *entry);
+
+/** Prints the table of kernels (launches, records, bytes, time, GB/s). */
+sluice_status sluice_profile_print(sluice_context *ctx, FILE *out);
+
+/** Saves the table as JSON: {"device": ..., "kernels": [{...}, ...]}. */
+sluice_status sluice_profile_write_json(sluice_context *ctx, const char *path);
+
+/** Forgets all statistics. */
+void sluice_profile_reset(sluice_context *ctx);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SLUICE_SLUICE_H */

@@ -1,0 +1,341 @@
+/* Device selection, the context, its variable pool and scratch. */
+#include "internal.h"
+
+#include <ctype.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void fill_info(cl_platform_id p, cl_device_id d, sluice_device_info *info)
+{
+    memset(info, 0, sizeof *info);
+    clGetPlatformInfo(p, CL_PLATFORM_NAME, sizeof info->platform - 1, info->platform, NULL);
+    clGetDeviceInfo(d, CL_DEVICE_NAME, sizeof info->name - 1, info->name, NULL);
+    clGetDeviceInfo(d, CL_DEVICE_OPENCL_C_VERSION, sizeof info->version - 1, info->version, NULL);
+    cl_device_type type = 0;
+    clGetDeviceInfo(d, CL_DEVICE_TYPE, sizeof type, &type, NULL);
+    info->is_cpu = (type & CL_DEVICE_TYPE_CPU) != 0;
+    cl_uint cu = 0;
+    clGetDeviceInfo(d, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof cu, &cu, NULL);
+    info->compute_units = cu;
+    clGetDeviceInfo(d, CL_DEVICE_MAX_WORK_GROUP_SIZE, sizeof info->max_work_group_size,
+                    &info->max_work_group_size, NULL);
+    cl_ulong v = 0;
+    clGetDeviceInfo(d, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof v, &v, NULL);
+    info->global_mem_bytes = v;
+    clGetDeviceInfo(d, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof v, &v, NULL);
+    info->max_alloc_bytes = v;
+    clGetDeviceInfo(d, CL_DEVICE_LOCAL_MEM_SIZE, sizeof v, &v, NULL);
+    info->local_mem_bytes = v;
+}
+
+/* Calls `visit` for every device of every platform; stops when it returns
+ * non-zero. Returns SLUICE_ERROR_NO_DEVICE when no platform exists. */
+typedef int (*device_visit)(void *user, cl_platform_id p, cl_device_id d);
+static sluice_status for_each_device(device_visit visit, void *user)
+{
+    cl_uint np = 0;
+    if (clGetPlatformIDs(0, NULL, &np) != CL_SUCCESS || np == 0)
+        return SLUICE_ERROR_NO_DEVICE;
+    cl_platform_id *ps = calloc(np, sizeof *ps);
+    if (!ps)
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    clGetPlatformIDs(np, ps, NULL);
+    sluice_status st = SLUICE_OK;
+    for (cl_uint i = 0; i < np; ++i) {
+        cl_uint nd = 0;
+        if (clGetDeviceIDs(ps[i], CL_DEVICE_TYPE_ALL, 0, NULL, &nd) != CL_SUCCESS || nd == 0)
+            continue;
+        cl_device_id *ds = calloc(nd, sizeof *ds);
+        if (!ds) {
+            st = SLUICE_ERROR_OUT_OF_MEMORY;
+            break;
+        }
+        clGetDeviceIDs(ps[i], CL_DEVICE_TYPE_ALL, nd, ds, NULL);
+        int stop = 0;
+        for (cl_uint j = 0; j < nd && !stop; ++j)
+            stop = visit(user, ps[i], ds[j]);
+        free(ds);
+        if (stop)
+            break;
+    }
+    free(ps);
+    return st;
+}
+
+typedef struct list_state {
+    sluice_device_info *out;
+    size_t max, count;
+} list_state;
+
+static int list_visit(void *user, cl_platform_id p, cl_device_id d)
+{
+    list_state *s = user;
+    if (s->count < s->max)
+        fill_info(p, d, &s->out[s->count]);
+    s->count++;
+    return 0;
+}
+
+sluice_status sluice_devices_list(sluice_device_info *out, size_t max, size_t *count)
+{
+    if (!count || (max && !out))
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    list_state s = {out, max, 0};
+    sluice_status st = for_each_device(list_visit, &s);
+    *count = s.count;
+    return st;
+}
+
+static int contains_nocase(const char *hay, const char *needle)
+{
+    size_t n = strlen(needle);
+    for (; *hay; ++hay) {
+        size_t i = 0;
+        while (i < n && hay[i] && tolower((unsigned char)hay[i]) == tolower((unsigned char)needle[i]))
+            ++i;
+        if (i == n)
+            return 1;
+    }
+    return n == 0;
+}
+
+typedef struct pick_state {
+    const char *filter;
+    int want_cpu; /* pass 1: CPU only; pass 2: anything */
+    cl_platform_id p;
+    cl_device_id d;
+    int found;
+} pick_state;
+
+static int pick_visit(void *user, cl_platform_id p, cl_device_id d)
+{
+    pick_state *s = user;
+    sluice_device_info info;
+    fill_info(p, d, &info);
+    if (s->filter) {
+        char both[300];
+        snprintf(both, sizeof both, "%s / %s", info.platform, info.name);
+        if (!contains_nocase(both, s->filter))
+            return 0;
+    } else if (s->want_cpu && !info.is_cpu) {
+        return 0;
+    }
+    s->p = p;
+    s->d = d;
+    s->found = 1;
+    return 1;
+}
+
+static void set_msg(char *error, size_t size, const char *msg)
+{
+    if (error && size) {
+        strncpy(error, msg, size - 1);
+        error[size - 1] = 0;
+    }
+}
+
+sluice_status sluice_context_create(const sluice_context_options *options, sluice_context **out,
+                                    char *error, size_t error_size)
+{
+    if (!out) {
+        set_msg(error, error_size, "sluice_context_create: out is NULL");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    *out = NULL;
+    sluice_context_options opt = {0};
+    if (options)
+        opt = *options;
+    if (!opt.device) {
+        const char *env = getenv("SLUICE_DEVICE");
+        if (env && *env)
+            opt.device = env;
+    }
+    const char *prof_env = getenv("SLUICE_PROFILE");
+    if (prof_env && *prof_env && strcmp(prof_env, "0") != 0)
+        opt.profile = 1;
+
+    pick_state ps = {opt.device, 1, NULL, NULL, 0};
+    sluice_status st = for_each_device(pick_visit, &ps);
+    if (st == SLUICE_OK && !ps.found && !opt.device) {
+        ps.want_cpu = 0;
+        st = for_each_device(pick_visit, &ps);
+    }
+    if (st != SLUICE_OK || !ps.found) {
+        char msg[512];
+        if (opt.device)
+            snprintf(msg, sizeof msg,
+                     "no OpenCL device matches \"%s\" (run sluice-info to list devices)",
+                     opt.device);
+        else
+            snprintf(msg, sizeof msg,
+                     "no OpenCL device found: is an ICD installed (e.g. pocl-opencl-icd)?");
+        set_msg(error, error_size, msg);
+        return st == SLUICE_OK ? SLUICE_ERROR_NO_DEVICE : st;
+    }
+
+    sluice_context *ctx = calloc(1, sizeof *ctx);
+    if (!ctx) {
+        set_msg(error, error_size, "out of host memory");
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    ctx->platform = ps.p;
+    ctx->device = ps.d;
+    fill_info(ps.p, ps.d, &ctx->info);
+    ctx->profile = opt.profile;
+    ctx->chunk = opt.chunk;
+    cl_int err;
+    cl_context_properties props[] = {CL_CONTEXT_PLATFORM, (cl_context_properties)ps.p, 0};
+    ctx->cl = clCreateContext(props, 1, &ps.d, NULL, NULL, &err);
+    if (!ctx->cl)
+        goto cl_error;
+    ctx->queue = clCreateCommandQueue(ctx->cl, ps.d, opt.profile ? CL_QUEUE_PROFILING_ENABLE : 0,
+                                      &err);
+    if (!ctx->queue)
+        goto cl_error;
+    ctx->vars = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, SL_VAR_POOL * sizeof(cl_uint), NULL,
+                               &err);
+    if (!ctx->vars)
+        goto cl_error;
+    ctx->var_used = calloc(SL_VAR_POOL, 1);
+    ctx->embedded = calloc(sl_embedded_source_count, sizeof *ctx->embedded);
+    if (!ctx->var_used || !ctx->embedded) {
+        sluice_context_destroy(ctx);
+        set_msg(error, error_size, "out of host memory");
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    *out = ctx;
+    return SLUICE_OK;
+
+cl_error : {
+    char msg[256];
+    snprintf(msg, sizeof msg, "creating an OpenCL context on \"%s\" failed: %s", ctx->info.name,
+             sl_cl_error_string(err));
+    set_msg(error, error_size, msg);
+    sluice_context_destroy(ctx);
+    return SLUICE_ERROR_OPENCL;
+}
+}
+
+void sluice_context_destroy(sluice_context *ctx)
+{
+    if (!ctx)
+        return;
+    if (ctx->queue)
+        clFinish(ctx->queue);
+    sl_profile_free(ctx);
+    if (ctx->scan_kernel)
+        clReleaseKernel(ctx->scan_kernel);
+    if (ctx->embedded) {
+        for (size_t i = 0; i < sl_embedded_source_count; ++i) {
+            if (ctx->embedded[i]) {
+                ctx->embedded[i]->owned_by_context = false;
+                sluice_program_destroy(ctx->embedded[i]);
+            }
+        }
+        free(ctx->embedded);
+    }
+    if (ctx->scratch)
+        clReleaseMemObject(ctx->scratch);
+    if (ctx->vars)
+        clReleaseMemObject(ctx->vars);
+    if (ctx->queue)
+        clReleaseCommandQueue(ctx->queue);
+    if (ctx->cl)
+        clReleaseContext(ctx->cl);
+    free(ctx->var_used);
+    free(ctx);
+}
+
+const char *sluice_context_error(const sluice_context *ctx)
+{
+    return ctx ? ctx->error : "no context";
+}
+
+sluice_status sluice_context_device(const sluice_context *ctx, sluice_device_info *info)
+{
+    if (!ctx || !info)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    *info = ctx->info;
+    return SLUICE_OK;
+}
+
+sluice_status sluice_context_finish(sluice_context *ctx)
+{
+    if (!ctx)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    cl_int err = clFinish(ctx->queue);
+    return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "clFinish");
+}
+
+void *sluice_context_cl_context(sluice_context *ctx)
+{
+    return ctx ? (void *)ctx->cl : NULL;
+}
+
+void *sluice_context_cl_queue(sluice_context *ctx)
+{
+    return ctx ? (void *)ctx->queue : NULL;
+}
+
+void *sluice_context_cl_device(sluice_context *ctx)
+{
+    return ctx ? (void *)ctx->device : NULL;
+}
+
+/* ---- variable pool ---- */
+
+sluice_status sl_vars_alloc(sluice_context *ctx, size_t count, cl_uint *first)
+{
+    size_t run = 0;
+    for (size_t i = 0; i < SL_VAR_POOL; ++i) {
+        run = ctx->var_used[i] ? 0 : run + 1;
+        if (run == count) {
+            size_t start = i + 1 - count;
+            memset(ctx->var_used + start, 1, count);
+            *first = (cl_uint)start;
+            return sl_vars_fill(ctx, (cl_uint)start, count, 0);
+        }
+    }
+    return sl_fail(ctx, SLUICE_ERROR_LIMIT,
+                   "the context's pool of %u device variables (stream lengths and counters) is "
+                   "full: destroy unused streams or counters",
+                   SL_VAR_POOL);
+}
+
+void sl_vars_free(sluice_context *ctx, cl_uint first, size_t count)
+{
+    if (first == SL_NONE)
+        return;
+    memset(ctx->var_used + first, 0, count);
+}
+
+sluice_status sl_vars_read(sluice_context *ctx, cl_uint first, size_t count, cl_uint *values)
+{
+    cl_int err = clEnqueueReadBuffer(ctx->queue, ctx->vars, CL_TRUE, first * sizeof(cl_uint),
+                                     count * sizeof(cl_uint), values, 0, NULL, NULL);
+    return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "reading device variables");
+}
+
+sluice_status sl_vars_fill(sluice_context *ctx, cl_uint first, size_t count, cl_uint value)
+{
+    cl_int err = clEnqueueFillBuffer(ctx->queue, ctx->vars, &value, sizeof value,
+                                     first * sizeof(cl_uint), count * sizeof(cl_uint), 0, NULL,
+                                     NULL);
+    return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "setting device variables");
+}
+
+sluice_status sl_scratch_reserve(sluice_context *ctx, size_t bytes)
+{
+    if (bytes <= ctx->scratch_bytes)
+        return SLUICE_OK;
+    size_t want = bytes < 65536 ? 65536 : bytes + bytes / 2;
+    cl_int err;
+    cl_mem m = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, want, NULL, &err);
+    if (!m)
+        return sl_cl_fail(ctx, err, "allocating scratch for ordered outputs");
+    if (ctx->scratch)
+        clReleaseMemObject(ctx->scratch); /* in-order queue: pending users keep it alive */
+    ctx->scratch = m;
+    ctx->scratch_bytes = want;
+    return SLUICE_OK;
+}

@@ -1,0 +1,90 @@
+/* Counters: named device-side uint32 counts bumped by kernels. */
+#include "internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+sluice_status sluice_counters_create(sluice_context *ctx, size_t count, const char *const *names,
+                                     sluice_counters **out)
+{
+    if (out)
+        *out = NULL;
+    if (!ctx || !out)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_counters_create: NULL context or out");
+    if (count == 0 || count > SLUICE_MAX_COUNTERS)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "a counter set holds 1 to %d counters, not %zu", SLUICE_MAX_COUNTERS, count);
+    sluice_counters *c = calloc(1, sizeof *c);
+    if (!c)
+        return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+    c->ctx = ctx;
+    c->count = count;
+    c->var = SL_NONE;
+    c->names = calloc(count, sizeof *c->names);
+    sluice_status st = c->names ? SLUICE_OK : SLUICE_ERROR_OUT_OF_MEMORY;
+    for (size_t i = 0; st == SLUICE_OK && i < count; ++i) {
+        char def[16];
+        snprintf(def, sizeof def, "c%zu", i);
+        c->names[i] = sl_strdup(names && names[i] ? names[i] : def);
+        if (!c->names[i])
+            st = SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    if (st != SLUICE_OK) {
+        sluice_counters_destroy(c);
+        return sl_fail(ctx, st, "out of host memory");
+    }
+    st = sl_vars_alloc(ctx, count, &c->var);
+    if (st != SLUICE_OK) {
+        sluice_counters_destroy(c);
+        return st;
+    }
+    *out = c;
+    return SLUICE_OK;
+}
+
+void sluice_counters_destroy(sluice_counters *c)
+{
+    if (!c)
+        return;
+    sl_vars_free(c->ctx, c->var, c->count);
+    if (c->names)
+        for (size_t i = 0; i < c->count; ++i)
+            free(c->names[i]);
+    free(c->names);
+    free(c);
+}
+
+size_t sluice_counters_count(const sluice_counters *c)
+{
+    return c ? c->count : 0;
+}
+
+int sluice_counters_index(const sluice_counters *c, const char *name)
+{
+    if (!c || !name)
+        return -1;
+    for (size_t i = 0; i < c->count; ++i)
+        if (strcmp(c->names[i], name) == 0)
+            return (int)i;
+    return -1;
+}
+
+sluice_status sluice_counters_reset(sluice_counters *c)
+{
+    if (!c)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    return sl_vars_fill(c->ctx, c->var, c->count, 0);
+}
+
+sluice_status sluice_counters_read(sluice_counters *c, uint32_t *values)
+{
+    if (!c || !values)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    cl_uint v[SLUICE_MAX_COUNTERS];
+    sluice_status st = sl_vars_read(c->ctx, c->var, c->count, v);
+    if (st == SLUICE_OK)
+        for (size_t i = 0; i < c->count; ++i)
+            values[i] = v[i];
+    return st;
+}

@@ -1,0 +1,412 @@
+/* Kernels over streams: argument binding and launches with conditional
+ * outputs (see kernels/sluice.cl for the device side). */
+#include "internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* Hidden parameters before the user's: variable pool, scratch, launch info. */
+#define SL_HIDDEN_ARGS 3u
+/* Work-items per work-group of a stream launch. */
+#define SL_LOCAL_SIZE 8u
+
+sluice_status sluice_kernel_create(sluice_program *program, const char *name, sluice_kernel **out)
+{
+    if (out)
+        *out = NULL;
+    if (!program || !name || !out)
+        return sl_fail(program ? program->ctx : NULL, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_kernel_create: NULL program, name or out");
+    sluice_context *ctx = program->ctx;
+    sluice_status st = sluice_program_build(program);
+    if (st != SLUICE_OK)
+        return st;
+    cl_int err;
+    cl_kernel k = clCreateKernel(program->cl, name, &err);
+    if (!k)
+        return sl_fail(ctx, SLUICE_ERROR_NOT_FOUND, "no kernel named %s in %s (%s)", name,
+                       program->name, sl_cl_error_string(err));
+    cl_uint nargs = 0;
+    clGetKernelInfo(k, CL_KERNEL_NUM_ARGS, sizeof nargs, &nargs, NULL);
+    if (nargs < SL_HIDDEN_ARGS) {
+        clReleaseKernel(k);
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "kernel %s in %s does not start with SLUICE_PARAMS", name, program->name);
+    }
+    sluice_kernel *kn = calloc(1, sizeof *kn);
+    if (!kn) {
+        clReleaseKernel(k);
+        return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+    }
+    kn->ctx = ctx;
+    kn->program = program;
+    kn->cl = k;
+    snprintf(kn->name, sizeof kn->name, "%s", name);
+    kn->n_args = nargs - SL_HIDDEN_ARGS;
+    kn->prof_var = SL_NONE;
+    size_t n = kn->n_args ? kn->n_args : 1;
+    kn->arg_kind = calloc(n, sizeof *kn->arg_kind);
+    kn->arg_stream = calloc(n, sizeof *kn->arg_stream);
+    kn->arg_map = calloc(n, 1);
+    if (!kn->arg_kind || !kn->arg_stream || !kn->arg_map) {
+        sluice_kernel_destroy(kn);
+        return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+    }
+    if (ctx->profile) {
+        st = sl_vars_alloc(ctx, 1 + SLUICE_MAX_OUTPUTS, &kn->prof_var);
+        if (st != SLUICE_OK) {
+            sluice_kernel_destroy(kn);
+            return st;
+        }
+        kn->prof_entry = sl_profile_entry(ctx, name);
+    }
+    kn->next_live = ctx->kernels;
+    ctx->kernels = kn;
+    *out = kn;
+    return SLUICE_OK;
+}
+
+void sluice_kernel_destroy(sluice_kernel *k)
+{
+    if (!k)
+        return;
+    sluice_context *ctx = k->ctx;
+    if (k->prof_var != SL_NONE) {
+        sl_profile_sync(ctx); /* fold this kernel's record counts in first */
+        sl_vars_free(ctx, k->prof_var, 1 + SLUICE_MAX_OUTPUTS);
+    }
+    for (sluice_kernel **p = &ctx->kernels; *p; p = &(*p)->next_live) {
+        if (*p == k) {
+            *p = k->next_live;
+            break;
+        }
+    }
+    if (k->cl)
+        clReleaseKernel(k->cl);
+    free(k->arg_kind);
+    free(k->arg_stream);
+    free(k->arg_map);
+    free(k);
+}
+
+const char *sluice_kernel_name(const sluice_kernel *k)
+{
+    return k ? k->name : "";
+}
+
+static sluice_status check_arg(sluice_kernel *k, unsigned arg)
+{
+    if (arg >= k->n_args)
+        return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "kernel %s has %u arguments; argument %u does not exist", k->name,
+                       k->n_args, arg);
+    return SLUICE_OK;
+}
+
+/* Forgets any stream role previously held by argument `arg`. */
+static void unbind_roles(sluice_kernel *k, unsigned arg)
+{
+    if (k->input && k->input_arg == arg)
+        k->input = NULL;
+    for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
+        if (k->out[s] && k->out_arg[s] == arg)
+            k->out[s] = NULL;
+    k->arg_map[arg] = 0;
+}
+
+static sluice_status bind_stream(sluice_kernel *k, unsigned arg, sluice_stream *stream)
+{
+    sluice_status st = check_arg(k, arg);
+    if (st != SLUICE_OK)
+        return st;
+    if (!stream || stream->ctx != k->ctx)
+        return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "kernel %s argument %u: NULL stream or a stream of another context",
+                       k->name, arg);
+    unbind_roles(k, arg);
+    k->arg_kind[arg] = SL_ARG_STREAM;
+    k->arg_stream[arg] = stream;
+    return SLUICE_OK;
+}
+
+sluice_status sluice_kernel_set_input(sluice_kernel *k, unsigned arg, sluice_stream *stream)
+{
+    if (!k)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (k->input) /* one input stream per kernel (Purcell 3.1.1) */
+        k->input = NULL;
+    sluice_status st = bind_stream(k, arg, stream);
+    if (st != SLUICE_OK)
+        return st;
+    k->input = stream;
+    k->input_arg = arg;
+    return SLUICE_OK;
+}
+
+sluice_status sluice_kernel_set_output(sluice_kernel *k, unsigned arg, unsigned slot,
+                                       sluice_stream *stream, sluice_output_mode mode)
+{
+    if (!k)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (slot >= SLUICE_MAX_OUTPUTS)
+        return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "kernel %s: output slot %u is out of range (0..%u)", k->name, slot,
+                       SLUICE_MAX_OUTPUTS - 1);
+    if (mode != SLUICE_ORDERED && mode != SLUICE_UNORDERED)
+        return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT, "kernel %s: bad output mode %d",
+                       k->name, (int)mode);
+    sluice_status st = bind_stream(k, arg, stream);
+    if (st != SLUICE_OK)
+        return st;
+    if (k->out[slot]) /* the slot moves to this argument */
+        k->arg_kind[k->out_arg[slot]] = k->out_arg[slot] == arg ? SL_ARG_STREAM : SL_ARG_UNSET;
+    k->out[slot] = stream;
+    k->out_arg[slot] = arg;
+    k->out_mode[slot] = mode;
+    return SLUICE_OK;
+}
+
+sluice_status sluice_kernel_set_stream(sluice_kernel *k, unsigned arg, sluice_stream *stream,
+                                       int map_output)
+{
+    if (!k)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    sluice_status st = bind_stream(k, arg, stream);
+    if (st == SLUICE_OK)
+        k->arg_map[arg] = map_output ? 1 : 0;
+    return st;
+}
+
+sluice_status sluice_kernel_set_arg(sluice_kernel *k, unsigned arg, size_t size, const void *value)
+{
+    if (!k)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    sluice_status st = check_arg(k, arg);
+    if (st != SLUICE_OK)
+        return st;
+    if (!value || !size)
+        return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "kernel %s argument %u: NULL value or size 0", k->name, arg);
+    cl_int err = clSetKernelArg(k->cl, SL_HIDDEN_ARGS + arg, size, value);
+    if (err != CL_SUCCESS)
+        return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "kernel %s argument %u: %s (a value of %zu bytes does not fit its type)",
+                       k->name, arg, sl_cl_error_string(err), size);
+    unbind_roles(k, arg);
+    k->arg_kind[arg] = SL_ARG_VALUE;
+    k->arg_stream[arg] = NULL;
+    return SLUICE_OK;
+}
+
+sluice_status sluice_kernel_set_counters(sluice_kernel *k, sluice_counters *counters)
+{
+    if (!k)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (counters && counters->ctx != k->ctx)
+        return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "kernel %s: counters belong to another context", k->name);
+    k->counters = counters;
+    return SLUICE_OK;
+}
+
+/* Records per work-item. On a CPU a work-item walking a long contiguous chunk
+ * is as fast as plain C and needs few atomics; aim for about a thousand chunks
+ * so both cores stay busy and the ordered scan stays small. */
+static size_t choose_chunk(const sluice_context *ctx, size_t bound)
+{
+    if (ctx->chunk)
+        return ctx->chunk;
+    size_t lo = 16, hi = 4096, want = bound / 1024;
+    if (!ctx->info.is_cpu) {
+        lo = 1;
+        hi = 64;
+        want = bound / 65536;
+    }
+    return want < lo ? lo : want > hi ? hi : want;
+}
+
+static sluice_status enqueue(sluice_kernel *k, size_t global, cl_event *ev)
+{
+    size_t local = SL_LOCAL_SIZE;
+    cl_int err = clEnqueueNDRangeKernel(k->ctx->queue, k->cl, 1, NULL, &global, &local, 0, NULL,
+                                        k->ctx->profile ? ev : NULL);
+    if (err != CL_SUCCESS) {
+        char what[128];
+        snprintf(what, sizeof what, "launching kernel %s", k->name);
+        return sl_cl_fail(k->ctx, err, what);
+    }
+    if (k->ctx->profile && *ev)
+        sl_profile_track(k->ctx, k->prof_entry, *ev);
+    return SLUICE_OK;
+}
+
+static sluice_status set_hidden(sluice_kernel *k, const sl_launch *L)
+{
+    sluice_context *ctx = k->ctx;
+    cl_mem scratch = ctx->scratch ? ctx->scratch : ctx->vars; /* never read unless ordered */
+    cl_int err = clSetKernelArg(k->cl, 0, sizeof(cl_mem), &ctx->vars);
+    if (err == CL_SUCCESS)
+        err = clSetKernelArg(k->cl, 1, sizeof(cl_mem), &scratch);
+    if (err == CL_SUCCESS)
+        err = clSetKernelArg(k->cl, 2, sizeof *L, L);
+    return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "setting launch arguments");
+}
+
+static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
+{
+    if (!k)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    sluice_context *ctx = k->ctx;
+    if (!has_count && !k->input)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "kernel %s has no input stream: bind one with sluice_kernel_set_input or "
+                       "use sluice_kernel_launch_count",
+                       k->name);
+    for (unsigned a = 0; a < k->n_args; ++a)
+        if (k->arg_kind[a] == SL_ARG_UNSET)
+            return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                           "kernel %s: argument %u is not set", k->name, a);
+    if (has_count && count > 0xfffffff0u)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "kernel %s: count %zu is too large",
+                       k->name, count);
+
+    sl_launch L;
+    memset(&L, 0, sizeof L);
+    size_t bound;
+    if (has_count) {
+        L.n_fixed = (cl_uint)count;
+        L.in_var = 0;
+        bound = count;
+    } else if (k->input->len_known) {
+        L.n_fixed = (cl_uint)(k->input->len < k->input->capacity ? k->input->len
+                                                                 : k->input->capacity);
+        L.in_var = k->input->var;
+        bound = L.n_fixed;
+    } else {
+        L.n_fixed = SL_NONE;
+        L.in_var = k->input->var;
+        bound = k->input->capacity;
+    }
+    /* Mapped outputs must hold the whole input. */
+    for (unsigned a = 0; a < k->n_args; ++a)
+        if (k->arg_map[a] && k->arg_stream[a]->capacity < bound)
+            return sl_fail(ctx, SLUICE_ERROR_OVERFLOW,
+                           "kernel %s: mapped output (argument %u) holds %zu records but the "
+                           "input may have %zu",
+                           k->name, a, k->arg_stream[a]->capacity, bound);
+
+    size_t chunk = choose_chunk(ctx, bound);
+    size_t chunks = (bound + chunk - 1) / chunk;
+    size_t global = sl_round_up(chunks ? chunks : 1, SL_LOCAL_SIZE);
+    L.chunk = (cl_uint)chunk;
+    L.stride = (cl_uint)(global + 1);
+    L.counter_var = k->counters ? k->counters->var : SL_NONE;
+    L.n_counters = k->counters ? (cl_uint)k->counters->count : 0;
+    L.prof_var = k->prof_var;
+    int any_unordered = 0;
+    for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s) {
+        sluice_stream *o = k->out[s];
+        if (!o)
+            continue;
+        L.out_mask |= 1u << s;
+        L.out_var[s] = o->var;
+        L.out_cap[s] = (cl_uint)o->capacity;
+        if (k->out_mode[s] == SLUICE_ORDERED)
+            L.ordered_mask |= 1u << s;
+        else
+            any_unordered = 1;
+    }
+
+    /* Stream arguments are set now, so swaps and grows since binding count. */
+    for (unsigned a = 0; a < k->n_args; ++a) {
+        if (k->arg_kind[a] != SL_ARG_STREAM)
+            continue;
+        cl_int err = clSetKernelArg(k->cl, SL_HIDDEN_ARGS + a, sizeof(cl_mem),
+                                    &k->arg_stream[a]->mem);
+        if (err != CL_SUCCESS)
+            return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                           "kernel %s argument %u is not a global buffer: %s", k->name, a,
+                           sl_cl_error_string(err));
+    }
+
+    sluice_status st = SLUICE_OK;
+    cl_event ev = NULL;
+    if (bound > 0) {
+        if (L.ordered_mask) {
+            st = sl_scratch_reserve(ctx, (size_t)SLUICE_MAX_OUTPUTS * L.stride * sizeof(cl_uint));
+            if (st != SLUICE_OK)
+                return st;
+            /* Count launch, scan of the chunk counts, write launch. */
+            L.mode = 1;
+            L.first_pass = 0;
+            st = set_hidden(k, &L);
+            if (st == SLUICE_OK)
+                st = enqueue(k, global, &ev);
+            if (st == SLUICE_OK && !ctx->scan_kernel)
+                st = sl_embedded_cl_kernel(ctx, "runtime.cl", "sluice_scan_chunk_counts",
+                                           &ctx->scan_kernel);
+            for (unsigned s = 0; st == SLUICE_OK && s < SLUICE_MAX_OUTPUTS; ++s) {
+                if (!((L.ordered_mask >> s) & 1u))
+                    continue;
+                cl_uint n = (cl_uint)global, var = L.out_var[s], offset = s * L.stride;
+                clSetKernelArg(ctx->scan_kernel, 0, sizeof(cl_mem), &ctx->vars);
+                clSetKernelArg(ctx->scan_kernel, 1, sizeof(cl_mem), &ctx->scratch);
+                clSetKernelArg(ctx->scan_kernel, 2, sizeof offset, &offset);
+                clSetKernelArg(ctx->scan_kernel, 3, sizeof var, &var);
+                clSetKernelArg(ctx->scan_kernel, 4, sizeof n, &n);
+                st = sl_enqueue_raw(ctx, ctx->scan_kernel, "sluice_scan_chunk_counts", 1, 1);
+            }
+            L.mode = 2;
+            L.first_pass = any_unordered ? 0 : 1;
+        } else {
+            L.mode = 0;
+            L.first_pass = L.out_mask ? 0 : 1;
+        }
+        if (st == SLUICE_OK)
+            st = set_hidden(k, &L);
+        if (st == SLUICE_OK)
+            st = enqueue(k, global, &ev);
+        if (st != SLUICE_OK)
+            return st;
+        if (ctx->profile)
+            ctx->prof[k->prof_entry].e.launches++;
+    }
+
+    /* Lengths: conditional outputs are now known only on the device; mapped
+     * outputs take the input's length. */
+    for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
+        if (k->out[s] && bound > 0)
+            k->out[s]->len_known = false;
+    for (unsigned a = 0; a < k->n_args && st == SLUICE_OK; ++a) {
+        if (!k->arg_map[a])
+            continue;
+        sluice_stream *m = k->arg_stream[a];
+        if (L.n_fixed != SL_NONE) {
+            st = sluice_stream_set_length(m, L.n_fixed);
+        } else {
+            cl_int err = clEnqueueCopyBuffer(ctx->queue, ctx->vars, ctx->vars,
+                                             L.in_var * sizeof(cl_uint), m->var * sizeof(cl_uint),
+                                             sizeof(cl_uint), 0, NULL, NULL);
+            if (err != CL_SUCCESS)
+                st = sl_cl_fail(ctx, err, "copying a mapped output's length");
+            m->len_known = false;
+        }
+    }
+    if (ctx->profile && st == SLUICE_OK) {
+        sl_profile_slot *slot = &ctx->prof[k->prof_entry];
+        slot->in_record_size = k->input ? k->input->record_size : 0;
+        for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
+            slot->out_record_size[s] = k->out[s] ? k->out[s]->record_size : 0;
+    }
+    return st;
+}
+
+sluice_status sluice_kernel_launch(sluice_kernel *k)
+{
+    return launch(k, 0, 0);
+}
+
+sluice_status sluice_kernel_launch_count(sluice_kernel *k, size_t count)
+{
+    return launch(k, 1, count);
+}

@@ -1,0 +1,150 @@
+/* Multipass loops driven by device-side counts (Purcell 4.1.2): the host
+ * reads the watched counts after each pass, as the occlusion query did, and
+ * stops when they are all zero or when the oracle says so. */
+#include "internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define SL_LOOP_DEFAULT_MAX 100000u
+
+struct sluice_loop {
+    sluice_context *ctx;
+    sluice_loop_desc desc;
+    sluice_pass_stats *passes;
+    unsigned pass_count, pass_cap;
+    uint32_t *values;
+    size_t value_count;
+};
+
+static double now_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
+}
+
+sluice_status sluice_loop_create(sluice_context *ctx, const sluice_loop_desc *desc,
+                                 sluice_loop **out)
+{
+    if (out)
+        *out = NULL;
+    if (!ctx || !desc || !out || !desc->pass)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_loop_create: NULL context, descriptor, out or pass function");
+    if (desc->stream_count && !desc->streams)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_loop_create: stream_count is %zu but streams is NULL",
+                       desc->stream_count);
+    for (size_t i = 0; i < desc->stream_count; ++i)
+        if (!desc->streams[i] || desc->streams[i]->ctx != ctx)
+            return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                           "sluice_loop_create: watched stream %zu is NULL or of another context",
+                           i);
+    if (!desc->oracle && desc->stream_count == 0 && !desc->counters)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_loop_create: a loop without an oracle must watch a stream or a "
+                       "counter, or it could never stop");
+    sluice_loop *l = calloc(1, sizeof *l);
+    if (!l)
+        return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+    l->ctx = ctx;
+    l->desc = *desc;
+    if (!l->desc.max_passes)
+        l->desc.max_passes = SL_LOOP_DEFAULT_MAX;
+    l->value_count = desc->stream_count + (desc->counters ? desc->counters->count : 0);
+    l->values = calloc(l->value_count ? l->value_count : 1, sizeof *l->values);
+    if (!l->values) {
+        free(l);
+        return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+    }
+    *out = l;
+    return SLUICE_OK;
+}
+
+void sluice_loop_destroy(sluice_loop *l)
+{
+    if (!l)
+        return;
+    free(l->passes);
+    free(l->values);
+    free(l);
+}
+
+static sluice_status read_values(sluice_loop *l)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < l->desc.stream_count; ++i) {
+        size_t len;
+        sluice_status st = sluice_stream_length(l->desc.streams[i], &len);
+        if (st != SLUICE_OK)
+            return st;
+        l->values[k++] = (uint32_t)len;
+    }
+    if (l->desc.counters) {
+        sluice_status st = sluice_counters_read(l->desc.counters, l->values + k);
+        if (st != SLUICE_OK)
+            return st;
+    }
+    return SLUICE_OK;
+}
+
+sluice_status sluice_loop_run(sluice_loop *l)
+{
+    if (!l)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    sluice_context *ctx = l->ctx;
+    l->pass_count = 0;
+    sluice_status st = read_values(l);
+    for (unsigned pass = 0; st == SLUICE_OK; ++pass) {
+        unsigned choice = 0;
+        if (l->desc.oracle) {
+            choice = l->desc.oracle(l->desc.user, pass, l->values, l->value_count);
+            if (choice == SLUICE_LOOP_STOP)
+                break;
+        } else {
+            int any = 0;
+            for (size_t i = 0; i < l->value_count; ++i)
+                any |= l->values[i] != 0;
+            if (!any)
+                break;
+        }
+        if (pass >= l->desc.max_passes)
+            return sl_fail(ctx, SLUICE_ERROR_LIMIT,
+                           "loop stopped after its limit of %u passes with work left",
+                           l->desc.max_passes);
+        if (l->pass_count == l->pass_cap) {
+            unsigned cap = l->pass_cap ? l->pass_cap * 2 : 64;
+            sluice_pass_stats *p = realloc(l->passes, cap * sizeof *p);
+            if (!p)
+                return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+            l->passes = p;
+            l->pass_cap = cap;
+        }
+        double t0 = now_seconds();
+        if (l->desc.reset_counters && l->desc.counters)
+            st = sluice_counters_reset(l->desc.counters);
+        if (st == SLUICE_OK)
+            st = l->desc.pass(l->desc.user, pass, choice);
+        if (st == SLUICE_OK)
+            st = read_values(l);
+        sluice_pass_stats *ps = &l->passes[l->pass_count++];
+        memset(ps, 0, sizeof *ps);
+        ps->choice = choice;
+        size_t nv = l->value_count < 16 ? l->value_count : 16;
+        memcpy(ps->values, l->values, nv * sizeof *l->values);
+        ps->seconds = now_seconds() - t0;
+    }
+    return st;
+}
+
+unsigned sluice_loop_pass_count(const sluice_loop *l)
+{
+    return l ? l->pass_count : 0;
+}
+
+const sluice_pass_stats *sluice_loop_pass(const sluice_loop *l, unsigned index)
+{
+    return (l && index < l->pass_count) ? &l->passes[index] : NULL;
+}

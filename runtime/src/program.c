@@ -1,0 +1,261 @@
+/* Programs: OpenCL C source built lazily, once. */
+#include "internal.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *sl_embedded_find(const char *name)
+{
+    for (size_t i = 0; i < sl_embedded_source_count; ++i)
+        if (strcmp(sl_embedded_sources[i].name, name) == 0)
+            return sl_embedded_sources[i].text;
+    return NULL;
+}
+
+/* Is this line `#include "sluice.cl"` or `#include <sluice.cl>`? */
+static int is_sluice_include(const char *line, size_t len)
+{
+    size_t i = 0;
+    while (i < len && (line[i] == ' ' || line[i] == '\t'))
+        ++i;
+    if (i >= len || line[i] != '#')
+        return 0;
+    ++i;
+    while (i < len && (line[i] == ' ' || line[i] == '\t'))
+        ++i;
+    if (len - i < 7 || strncmp(line + i, "include", 7) != 0)
+        return 0;
+    i += 7;
+    while (i < len && (line[i] == ' ' || line[i] == '\t'))
+        ++i;
+    return (len - i >= 11) &&
+           (strncmp(line + i, "\"sluice.cl\"", 11) == 0 || strncmp(line + i, "<sluice.cl>", 11) == 0);
+}
+
+/* The text handed to the compiler: the embedded sluice.cl, a #line directive
+ * so that messages name the user's file and line, then the user's source with
+ * its include lines of sluice.cl blanked (line numbers stay right). */
+static char *compose_source(const char *name, const char *source)
+{
+    const char *header = sl_embedded_find("sluice.cl");
+    size_t hl = header ? strlen(header) : 0, sl = strlen(source), nl = strlen(name);
+    char *out = malloc(hl + sl + nl + 64);
+    if (!out)
+        return NULL;
+    char *p = out;
+    if (header) {
+        memcpy(p, header, hl);
+        p += hl;
+    }
+    p += sprintf(p, "\n#line 1 \"");
+    for (const char *c = name; *c; ++c) /* quotes and backslashes would end the string */
+        *p++ = (*c == '"' || *c == '\\') ? '_' : *c;
+    p += sprintf(p, "\"\n");
+    const char *s = source;
+    while (*s) {
+        const char *e = strchr(s, '\n');
+        size_t len = e ? (size_t)(e - s) : strlen(s);
+        if (!is_sluice_include(s, len)) {
+            memcpy(p, s, len);
+            p += len;
+        }
+        if (e)
+            *p++ = '\n';
+        s += len + (e ? 1 : 0);
+    }
+    *p = 0;
+    return out;
+}
+
+sluice_status sluice_program_create_source(sluice_context *ctx, const char *name,
+                                           const char *source, const char *options,
+                                           sluice_program **out)
+{
+    if (out)
+        *out = NULL;
+    if (!ctx || !source || !out)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_program_create_source: NULL context, source or out");
+    if (!name)
+        name = "<string>";
+    sluice_program *p = calloc(1, sizeof *p);
+    if (!p)
+        return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+    p->ctx = ctx;
+    p->name = sl_strdup(name);
+    p->source = compose_source(name, source);
+    p->options = sl_strdup(options ? options : "");
+    p->log = sl_strdup("");
+    if (!p->name || !p->source || !p->options || !p->log) {
+        sluice_program_destroy(p);
+        return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+    }
+    *out = p;
+    return SLUICE_OK;
+}
+
+sluice_status sluice_program_create_file(sluice_context *ctx, const char *path,
+                                         const char *options, sluice_program **out)
+{
+    if (out)
+        *out = NULL;
+    if (!ctx || !path || !out)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_program_create_file: NULL context, path or out");
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return sl_fail(ctx, SLUICE_ERROR_IO, "cannot open kernel file %s: %s", path,
+                       strerror(errno));
+    char *text = NULL;
+    size_t len = 0, cap = 0;
+    for (;;) {
+        if (len + 4096 + 1 > cap) {
+            cap = cap ? cap * 2 : 8192;
+            char *t = realloc(text, cap);
+            if (!t) {
+                free(text);
+                fclose(f);
+                return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+            }
+            text = t;
+        }
+        size_t got = fread(text + len, 1, 4096, f);
+        len += got;
+        if (got < 4096)
+            break;
+    }
+    int bad = ferror(f);
+    fclose(f);
+    if (bad) {
+        free(text);
+        return sl_fail(ctx, SLUICE_ERROR_IO, "error reading kernel file %s", path);
+    }
+    text[len] = 0;
+    if (strlen(text) != len) {
+        free(text);
+        return sl_fail(ctx, SLUICE_ERROR_IO, "kernel file %s contains a NUL byte: not OpenCL C",
+                       path);
+    }
+    sluice_status st = sluice_program_create_source(ctx, path, text, options, out);
+    free(text);
+    return st;
+}
+
+void sluice_program_destroy(sluice_program *p)
+{
+    if (!p || p->owned_by_context)
+        return;
+    if (p->cl)
+        clReleaseProgram(p->cl);
+    free(p->name);
+    free(p->source);
+    free(p->options);
+    free(p->log);
+    free(p);
+}
+
+sluice_status sluice_program_build(sluice_program *p)
+{
+    if (!p)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (p->cl)
+        return SLUICE_OK;
+    sluice_context *ctx = p->ctx;
+    cl_int err;
+    const char *src = p->source;
+    cl_program prog = clCreateProgramWithSource(ctx->cl, 1, &src, NULL, &err);
+    if (!prog)
+        return sl_cl_fail(ctx, err, "clCreateProgramWithSource");
+    size_t ol = strlen(p->options) + 64;
+    char *opts = malloc(ol);
+    if (!opts) {
+        clReleaseProgram(prog);
+        return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+    }
+    snprintf(opts, ol, "-cl-std=CL1.2 %s", p->options);
+    err = clBuildProgram(prog, 1, &ctx->device, opts, NULL, NULL);
+    free(opts);
+    size_t log_size = 0;
+    clGetProgramBuildInfo(prog, ctx->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &log_size);
+    char *log = malloc(log_size + 1);
+    if (log) {
+        log[0] = 0;
+        clGetProgramBuildInfo(prog, ctx->device, CL_PROGRAM_BUILD_LOG, log_size, log, NULL);
+        log[log_size] = 0;
+        free(p->log);
+        p->log = log;
+    }
+    if (err != CL_SUCCESS) {
+        clReleaseProgram(prog);
+        if (err == CL_BUILD_PROGRAM_FAILURE || err == CL_INVALID_BUILD_OPTIONS)
+            return sl_fail(ctx, SLUICE_ERROR_BUILD, "building %s failed:\n%s", p->name,
+                           p->log ? p->log : "(no log)");
+        return sl_cl_fail(ctx, err, "clBuildProgram");
+    }
+    p->cl = prog;
+    return SLUICE_OK;
+}
+
+const char *sluice_program_build_log(const sluice_program *p)
+{
+    return (p && p->log) ? p->log : "";
+}
+
+sluice_status sl_embedded_program(sluice_context *ctx, const char *name, sluice_program **out)
+{
+    for (size_t i = 0; i < sl_embedded_source_count; ++i) {
+        if (strcmp(sl_embedded_sources[i].name, name) != 0)
+            continue;
+        if (!ctx->embedded[i]) {
+            sluice_program *p;
+            sluice_status st =
+                sluice_program_create_source(ctx, name, sl_embedded_sources[i].text, NULL, &p);
+            if (st != SLUICE_OK)
+                return st;
+            p->owned_by_context = true;
+            ctx->embedded[i] = p;
+        }
+        *out = ctx->embedded[i];
+        return sluice_program_build(*out);
+    }
+    return sl_fail(ctx, SLUICE_ERROR_NOT_FOUND, "no embedded kernel source named %s", name);
+}
+
+sluice_status sl_embedded_cl_kernel(sluice_context *ctx, const char *program, const char *kernel,
+                                    cl_kernel *out)
+{
+    sluice_program *p;
+    sluice_status st = sl_embedded_program(ctx, program, &p);
+    if (st != SLUICE_OK)
+        return st;
+    cl_int err;
+    *out = clCreateKernel(p->cl, kernel, &err);
+    if (!*out)
+        return sl_fail(ctx, SLUICE_ERROR_NOT_FOUND, "kernel %s not found in %s: %s", kernel,
+                       program, sl_cl_error_string(err));
+    return SLUICE_OK;
+}
+
+sluice_status sl_enqueue_raw(sluice_context *ctx, cl_kernel k, const char *name, size_t global,
+                             size_t local)
+{
+    if (global == 0)
+        return SLUICE_OK;
+    if (local)
+        global = sl_round_up(global, local);
+    cl_event ev = NULL;
+    cl_int err = clEnqueueNDRangeKernel(ctx->queue, k, 1, NULL, &global, local ? &local : NULL, 0,
+                                        NULL, ctx->profile ? &ev : NULL);
+    if (err != CL_SUCCESS) {
+        char what[128];
+        snprintf(what, sizeof what, "launching %s", name);
+        return sl_cl_fail(ctx, err, what);
+    }
+    if (ev) {
+        size_t entry = sl_profile_entry(ctx, name);
+        ctx->prof[entry].e.launches++;
+        sl_profile_track(ctx, entry, ev);
+    }
+    return SLUICE_OK;
+}

@@ -1,0 +1,64 @@
+/* A minimal test harness: CHECK records a failure and goes on; each test
+ * program ends with check_summary(), which prints "N passed, N failed" and
+ * returns the exit status. */
+#ifndef SLUICE_TESTS_CHECK_H
+#define SLUICE_TESTS_CHECK_H
+
+#include "sluice/sluice.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+static int check_passed_, check_failed_;
+
+#define CHECK(cond, ...)                                                                           \
+    do {                                                                                           \
+        if (cond) {                                                                                \
+            check_passed_++;                                                                       \
+        } else {                                                                                   \
+            check_failed_++;                                                                       \
+            fprintf(stderr, "%s:%d: CHECK(%s) failed: ", __FILE__, __LINE__, #cond);               \
+            fprintf(stderr, __VA_ARGS__);                                                          \
+            fputc('\n', stderr);                                                                   \
+        }                                                                                          \
+    } while (0)
+
+/* Checks that a sluice call returned SLUICE_OK, printing the context error. */
+#define CHECK_OK(ctx, call)                                                                        \
+    do {                                                                                           \
+        sluice_status st_ = (call);                                                                \
+        CHECK(st_ == SLUICE_OK, "%s -> %s: %s", #call, sluice_status_string(st_),                  \
+              sluice_context_error(ctx));                                                          \
+    } while (0)
+
+static inline int check_summary(void)
+{
+    printf("%d passed, %d failed\n", check_passed_, check_failed_);
+    return check_failed_ ? 1 : 0;
+}
+
+/* Creates the test context or exits with a message (tests only). */
+static inline sluice_context *check_context(int profile)
+{
+    char err[512];
+    sluice_context_options o = {0};
+    o.profile = profile;
+    sluice_context *ctx = NULL;
+    if (sluice_context_create(&o, &ctx, err, sizeof err) != SLUICE_OK) {
+        fprintf(stderr, "cannot create a context: %s\n", err);
+        exit(2);
+    }
+    return ctx;
+}
+
+/* xorshift32: reproducible random inputs. */
+static inline uint32_t check_rand(uint32_t *state)
+{
+    uint32_t x = *state;
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    return *state = x;
+}
+
+#endif

@@ -1,0 +1,472 @@
+/* Tests of the stream runtime: streams, kernels with mapped and conditional
+ * outputs (ordered and unordered), counters, loops, profiling and errors,
+ * against plain C references. */
+#include "check.h"
+
+#include <math.h>
+#include <string.h>
+
+static const char *kernels_src =
+    "#include \"sluice.cl\"\n"
+    "__kernel void scale(SLUICE_PARAMS, global const float *in, global float *out, float k)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i)\n"
+    "        out[i] = in[i] * k;\n"
+    "}\n"
+    "__kernel void split3(SLUICE_PARAMS, global const uint *in, global uint *a,\n"
+    "                     global uint *b, global uint *c)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i) {\n"
+    "        uint x = in[i];\n"
+    "        SLUICE_EMIT_IF(0, a, x, x % 3u == 0u);\n"
+    "        SLUICE_EMIT_IF(1, b, x, x % 3u == 1u);\n"
+    "        SLUICE_EMIT_IF(2, c, x, x % 3u == 2u);\n"
+    "        SLUICE_COUNT(0, 1u);\n"
+    "        SLUICE_COUNT(1, x & 1u);\n"
+    "    }\n"
+    "}\n"
+    "__kernel void dup(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i) {\n"
+    "        uint x = in[i];\n"
+    "        for (uint j = 0; j < x % 3u; ++j)\n"
+    "            SLUICE_EMIT(0, out, x * 4u + j);\n"
+    "    }\n"
+    "}\n"
+    "__kernel void iota(SLUICE_PARAMS, global uint *out)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i)\n"
+    "        out[i] = i;\n"
+    "}\n"
+    /* Halves every value and keeps those still above 1: a shrinking loop. */
+    "__kernel void halve(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i) {\n"
+    "        uint x = in[i] / 2u;\n"
+    "        SLUICE_EMIT_IF(0, out, x, x > 1u);\n"
+    "        SLUICE_COUNT(0, x > 1u);\n"
+    "    }\n"
+    "}\n";
+
+static sluice_program *program(sluice_context *ctx)
+{
+    sluice_program *p = NULL;
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "test_kernels.cl", kernels_src, NULL, &p));
+    return p;
+}
+
+static void test_streams(sluice_context *ctx)
+{
+    sluice_stream *s = NULL, *t = NULL;
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, 10, &s));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, 0, &t));
+    uint32_t v[10] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10}, w[20] = {0};
+    size_t n = 99;
+    CHECK_OK(ctx, sluice_stream_length(s, &n));
+    CHECK(n == 0, "new stream length %zu", n);
+    CHECK_OK(ctx, sluice_stream_upload(s, v, 10));
+    CHECK(sluice_stream_upload(s, v, 11) == SLUICE_ERROR_OVERFLOW, "upload over capacity");
+    CHECK_OK(ctx, sluice_stream_download(s, w, 20, &n));
+    CHECK(n == 10 && memcmp(v, w, sizeof v) == 0, "round trip");
+    CHECK_OK(ctx, sluice_stream_grow(s, 1000));
+    CHECK(sluice_stream_capacity(s) == 1000, "grow capacity");
+    memset(w, 0, sizeof w);
+    CHECK_OK(ctx, sluice_stream_download(s, w, 20, &n));
+    CHECK(n == 10 && memcmp(v, w, sizeof v) == 0, "grow keeps records");
+    CHECK_OK(ctx, sluice_stream_swap(s, t));
+    CHECK(sluice_stream_capacity(t) == 1000 && sluice_stream_capacity(s) == 0, "swap");
+    CHECK_OK(ctx, sluice_stream_length(t, &n));
+    CHECK(n == 10, "swap moves the length (%zu)", n);
+    CHECK_OK(ctx, sluice_stream_set_length(t, 3));
+    CHECK_OK(ctx, sluice_stream_length(t, &n));
+    CHECK(n == 3, "set_length");
+    CHECK(sluice_stream_set_length(t, 1001) == SLUICE_ERROR_OVERFLOW, "set_length over capacity");
+    sluice_stream *d = NULL;
+    CHECK(sluice_stream_create(ctx, 8, 0, NULL) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL out");
+    CHECK(sluice_stream_create(ctx, 0, 5, &d) == SLUICE_ERROR_INVALID_ARGUMENT && !d,
+          "record size 0");
+    sluice_stream *u = NULL;
+    CHECK_OK(ctx, sluice_stream_create(ctx, 8, 3, &u));
+    CHECK(sluice_stream_swap(s, u) == SLUICE_ERROR_INVALID_ARGUMENT, "swap of mixed sizes");
+    /* A request larger than device memory fails cleanly. */
+    sluice_device_info info;
+    sluice_context_device(ctx, &info);
+    sluice_stream *huge = NULL;
+    sluice_status st = sluice_stream_create(ctx, 1024, (size_t)(info.global_mem_bytes / 512), &huge);
+    CHECK(st == SLUICE_ERROR_OUT_OF_MEMORY && !huge, "huge stream: %s", sluice_status_string(st));
+    CHECK(strstr(sluice_context_error(ctx), "bytes") != NULL, "message: %s",
+          sluice_context_error(ctx));
+    sluice_stream_destroy(s);
+    sluice_stream_destroy(t);
+    sluice_stream_destroy(u);
+    sluice_stream_destroy(NULL);
+}
+
+static void test_map(sluice_context *ctx, sluice_program *p)
+{
+    sluice_kernel *k = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "scale", &k));
+    if (!k)
+        return;
+    const size_t sizes[] = {0, 1, 7, 255, 256, 257, 100000};
+    for (size_t si = 0; si < sizeof sizes / sizeof *sizes; ++si) {
+        size_t n = sizes[si];
+        float *in = malloc((n + 1) * sizeof *in), *out = malloc((n + 1) * sizeof *out);
+        for (size_t i = 0; i < n; ++i)
+            in[i] = (float)i * 0.5f;
+        sluice_stream *a, *b;
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &a));
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &b));
+        CHECK_OK(ctx, sluice_stream_upload(a, in, n));
+        float kf = 3.0f;
+        CHECK_OK(ctx, sluice_kernel_set_input(k, 0, a));
+        CHECK_OK(ctx, sluice_kernel_set_stream(k, 1, b, 1));
+        CHECK_OK(ctx, sluice_kernel_set_arg(k, 2, sizeof kf, &kf));
+        CHECK_OK(ctx, sluice_kernel_launch(k));
+        size_t got = 99;
+        CHECK_OK(ctx, sluice_stream_download(b, out, n, &got));
+        CHECK(got == n, "mapped length %zu of %zu", got, n);
+        int bad = 0;
+        for (size_t i = 0; i < got; ++i)
+            bad += out[i] != in[i] * 3.0f;
+        CHECK(bad == 0, "scale n=%zu: %d wrong", n, bad);
+        sluice_stream_destroy(a);
+        sluice_stream_destroy(b);
+        free(in);
+        free(out);
+    }
+    /* Argument errors. */
+    CHECK(sluice_kernel_set_arg(k, 9, 4, &sizes) == SLUICE_ERROR_INVALID_ARGUMENT, "arg index");
+    CHECK(strstr(sluice_context_error(ctx), "argument 9") != NULL, "%s", sluice_context_error(ctx));
+    CHECK(sluice_kernel_set_arg(k, 2, 2, &sizes) == SLUICE_ERROR_INVALID_ARGUMENT, "arg size");
+    sluice_kernel_destroy(k);
+
+    sluice_kernel *g = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "iota", &g));
+    sluice_stream *o;
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, 5000, &o));
+    CHECK(sluice_kernel_launch_count(g, 10) == SLUICE_ERROR_INVALID_ARGUMENT, "unset argument");
+    CHECK(strstr(sluice_context_error(ctx), "argument 0 is not set") != NULL, "%s",
+          sluice_context_error(ctx));
+    CHECK_OK(ctx, sluice_kernel_set_stream(g, 0, o, 0));
+    CHECK_OK(ctx, sluice_kernel_launch_count(g, 5000));
+    uint32_t *r = malloc(5000 * 4);
+    CHECK_OK(ctx, sluice_stream_set_length(o, 5000));
+    CHECK_OK(ctx, sluice_stream_download(o, r, 5000, NULL));
+    int bad = 0;
+    for (uint32_t i = 0; i < 5000; ++i)
+        bad += r[i] != i;
+    CHECK(bad == 0, "generator: %d wrong", bad);
+    CHECK(sluice_kernel_launch(g) == SLUICE_ERROR_INVALID_ARGUMENT, "launch without input");
+    free(r);
+    sluice_stream_destroy(o);
+    sluice_kernel_destroy(g);
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The split into three conditional outputs against a C reference. */
+static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pattern,
+                       sluice_output_mode mode)
+{
+    sluice_kernel *k = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "split3", &k));
+    sluice_counters *cn = NULL;
+    const char *names[] = {"records", "odd"};
+    CHECK_OK(ctx, sluice_counters_create(ctx, 2, names, &cn));
+    uint32_t *in = malloc((n + 1) * 4), *ref[3], *got = malloc((n + 1) * 4);
+    size_t rn[3] = {0, 0, 0};
+    uint32_t seed = 12345u + (uint32_t)n, odd = 0;
+    for (int j = 0; j < 3; ++j)
+        ref[j] = malloc((n + 1) * 4);
+    for (size_t i = 0; i < n; ++i) {
+        uint32_t x = pattern == 0   ? check_rand(&seed)
+                     : pattern == 1 ? 7u                        /* all equal: one output */
+                     : pattern == 2 ? (uint32_t)(3 * i)         /* everything to output 0 */
+                                    : (uint32_t)(n - i);        /* reverse */
+        in[i] = x;
+        ref[x % 3][rn[x % 3]++] = x;
+        odd += x & 1u;
+    }
+    sluice_stream *s_in, *s_out[3];
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &s_in));
+    CHECK_OK(ctx, sluice_stream_upload(s_in, in, n));
+    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, s_in));
+    for (int j = 0; j < 3; ++j) {
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &s_out[j]));
+        CHECK_OK(ctx, sluice_kernel_set_output(k, 1 + j, j, s_out[j], mode));
+    }
+    CHECK_OK(ctx, sluice_kernel_set_counters(k, cn));
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+    for (int j = 0; j < 3; ++j) {
+        size_t len = 0;
+        CHECK_OK(ctx, sluice_stream_download(s_out[j], got, n, &len));
+        CHECK(len == rn[j], "n=%zu pattern %d output %d: length %zu, want %zu", n, pattern, j,
+              len, rn[j]);
+        if (mode == SLUICE_UNORDERED) {
+            qsort(got, len, 4, cmp_u32);
+            qsort(ref[j], rn[j], 4, cmp_u32);
+        }
+        CHECK(len == rn[j] && memcmp(got, ref[j], len * 4) == 0,
+              "n=%zu pattern %d output %d (%s): records differ", n, pattern, j,
+              mode == SLUICE_ORDERED ? "ordered" : "unordered");
+    }
+    uint32_t cv[2];
+    CHECK_OK(ctx, sluice_counters_read(cn, cv));
+    CHECK(cv[0] == n && cv[1] == odd, "counters %u %u, want %zu %u", cv[0], cv[1], n, odd);
+    CHECK(sluice_counters_index(cn, "odd") == 1 && sluice_counters_index(cn, "x") == -1,
+          "counter names");
+    for (int j = 0; j < 3; ++j) {
+        sluice_stream_destroy(s_out[j]);
+        free(ref[j]);
+    }
+    sluice_stream_destroy(s_in);
+    sluice_counters_destroy(cn);
+    sluice_kernel_destroy(k);
+    free(in);
+    free(got);
+}
+
+/* Several records per input, appended after existing contents, and overflow. */
+static void test_multi_emit(sluice_context *ctx, sluice_program *p, sluice_output_mode mode)
+{
+    const size_t n = 10001;
+    sluice_kernel *k = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "dup", &k));
+    uint32_t *in = malloc(n * 4), *ref = malloc(3 * n * 4 + 8), *got = malloc(3 * n * 4 + 8);
+    size_t rn = 2;
+    ref[0] = 111;
+    ref[1] = 222;
+    for (size_t i = 0; i < n; ++i) {
+        in[i] = (uint32_t)(i * 7919u % 10007u);
+        for (uint32_t j = 0; j < in[i] % 3; ++j)
+            ref[rn++] = in[i] * 4 + j;
+    }
+    sluice_stream *a, *o;
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &a));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, rn, &o));
+    CHECK_OK(ctx, sluice_stream_upload(a, in, n));
+    CHECK_OK(ctx, sluice_stream_upload(o, ref, 2)); /* appended after these */
+    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, a));
+    CHECK_OK(ctx, sluice_kernel_set_output(k, 1, 0, o, mode));
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+    size_t len = 0;
+    CHECK_OK(ctx, sluice_stream_download(o, got, rn, &len));
+    if (mode == SLUICE_UNORDERED) {
+        qsort(got + 2, len - 2, 4, cmp_u32);
+        qsort(ref + 2, rn - 2, 4, cmp_u32);
+    }
+    CHECK(len == rn && memcmp(got, ref, rn * 4) == 0, "multi-emit: length %zu want %zu", len,
+          rn);
+    /* Second launch into a full stream: overflow is reported, nothing crashes. */
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+    sluice_status st = sluice_stream_download(o, got, rn, &len);
+    CHECK(st == SLUICE_ERROR_OVERFLOW && len == rn, "overflow: %s, %zu",
+          sluice_status_string(st), len);
+    CHECK(memcmp(got, ref, 2 * 4) == 0, "records before the overflow are intact");
+    sluice_stream_destroy(a);
+    sluice_stream_destroy(o);
+    sluice_kernel_destroy(k);
+    free(in);
+    free(ref);
+    free(got);
+}
+
+typedef struct loop_user {
+    sluice_kernel *k;
+    sluice_stream *a, *b;
+    sluice_counters *cn;
+} loop_user;
+
+static sluice_status halve_pass(void *user, unsigned pass, unsigned choice)
+{
+    (void)pass;
+    (void)choice;
+    loop_user *u = user;
+    sluice_status st = sluice_stream_clear(u->b);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_input(u->k, 0, u->a);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(u->k, 1, 0, u->b, SLUICE_UNORDERED);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch(u->k);
+    if (st == SLUICE_OK)
+        st = sluice_stream_swap(u->a, u->b);
+    return st;
+}
+
+static unsigned stop_at_three(void *user, unsigned pass, const uint32_t *values, size_t count)
+{
+    (void)user;
+    (void)values;
+    (void)count;
+    return pass >= 3 ? SLUICE_LOOP_STOP : pass;
+}
+
+static void test_loop(sluice_context *ctx, sluice_program *p)
+{
+    const size_t n = 50000;
+    loop_user u = {0};
+    CHECK_OK(ctx, sluice_kernel_create(p, "halve", &u.k));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &u.a));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &u.b));
+    CHECK_OK(ctx, sluice_counters_create(ctx, 1, NULL, &u.cn));
+    CHECK_OK(ctx, sluice_kernel_set_counters(u.k, u.cn));
+    uint32_t *in = malloc(n * 4), seed = 99, maxv = 0;
+    for (size_t i = 0; i < n; ++i) {
+        in[i] = check_rand(&seed) >> (i % 32);
+        maxv = in[i] > maxv ? in[i] : maxv;
+    }
+    CHECK_OK(ctx, sluice_stream_upload(u.a, in, n));
+    /* Reference: passes until the largest value halves down to <= 1. */
+    unsigned want = 0;
+    for (uint32_t x = maxv; x > 1; x /= 2)
+        ++want;
+    sluice_stream *watch[] = {u.a};
+    sluice_loop_desc d = {0};
+    d.pass = halve_pass;
+    d.user = &u;
+    d.streams = watch;
+    d.stream_count = 1;
+    d.counters = u.cn;
+    d.reset_counters = 1;
+    sluice_loop *loop = NULL;
+    CHECK_OK(ctx, sluice_loop_create(ctx, &d, &loop));
+    CHECK_OK(ctx, sluice_loop_run(loop));
+    CHECK(sluice_loop_pass_count(loop) == want, "passes %u want %u", sluice_loop_pass_count(loop),
+          want);
+    const sluice_pass_stats *ps = sluice_loop_pass(loop, 0);
+    size_t alive = 0;
+    for (size_t i = 0; i < n; ++i)
+        alive += in[i] / 2 > 1;
+    CHECK(ps && ps->values[0] == alive && ps->values[1] == alive,
+          "pass 0 values %u %u, want %zu", ps ? ps->values[0] : 0, ps ? ps->values[1] : 0, alive);
+    CHECK(sluice_loop_pass(loop, want) == NULL, "no stats past the end");
+    sluice_loop_destroy(loop);
+
+    /* Pass limit and oracle. */
+    CHECK_OK(ctx, sluice_stream_upload(u.a, in, n));
+    d.max_passes = 2;
+    CHECK_OK(ctx, sluice_loop_create(ctx, &d, &loop));
+    CHECK(sluice_loop_run(loop) == SLUICE_ERROR_LIMIT, "pass limit");
+    sluice_loop_destroy(loop);
+    CHECK_OK(ctx, sluice_stream_upload(u.a, in, n));
+    d.max_passes = 0;
+    d.oracle = stop_at_three;
+    CHECK_OK(ctx, sluice_loop_create(ctx, &d, &loop));
+    CHECK_OK(ctx, sluice_loop_run(loop));
+    CHECK(sluice_loop_pass_count(loop) == 3 && sluice_loop_pass(loop, 2)->choice == 2,
+          "oracle stops after 3 passes");
+    sluice_loop_destroy(loop);
+    sluice_loop_desc bad = {0};
+    bad.pass = halve_pass;
+    CHECK(sluice_loop_create(ctx, &bad, &loop) == SLUICE_ERROR_INVALID_ARGUMENT,
+          "loop that cannot stop");
+    free(in);
+    sluice_counters_destroy(u.cn);
+    sluice_stream_destroy(u.a);
+    sluice_stream_destroy(u.b);
+    sluice_kernel_destroy(u.k);
+}
+
+static void test_errors(sluice_context *ctx)
+{
+    const char *bad_src = "#include \"sluice.cl\"\n"
+                          "__kernel void broken(SLUICE_PARAMS, global uint *x)\n"
+                          "{\n"
+                          "    SLUICE_FOR_EACH(i) x[i] = undefined_thing;\n"
+                          "}\n";
+    sluice_program *p = NULL;
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "broken.cl", bad_src, NULL, &p));
+    sluice_kernel *k = NULL;
+    sluice_status st = sluice_kernel_create(p, "broken", &k);
+    CHECK(st == SLUICE_ERROR_BUILD && !k, "syntax error gives a build error: %s",
+          sluice_status_string(st));
+    CHECK(strstr(sluice_program_build_log(p), "broken.cl:4:") != NULL, "log names line 4: %s",
+          sluice_program_build_log(p));
+    CHECK(strstr(sluice_context_error(ctx), "broken.cl:4:") != NULL, "error names line 4");
+    sluice_program_destroy(p);
+
+    CHECK(sluice_program_create_file(ctx, "/nonexistent/k.cl", NULL, &p) == SLUICE_ERROR_IO,
+          "missing file");
+    CHECK(strstr(sluice_context_error(ctx), "/nonexistent/k.cl") != NULL, "names the file");
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "ok.cl", "#include <sluice.cl>\n"
+                                                             "__kernel void f(SLUICE_PARAMS, global uint *x)\n"
+                                                             "{ SLUICE_FOR_EACH(i) x[i] = 1u; }\n",
+                                               NULL, &p));
+    CHECK(sluice_kernel_create(p, "nope", &k) == SLUICE_ERROR_NOT_FOUND, "unknown kernel");
+    CHECK(sluice_kernel_create(NULL, "f", &k) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL program");
+    sluice_program_destroy(p);
+    sluice_counters *c = NULL;
+    CHECK(sluice_counters_create(ctx, 0, NULL, &c) == SLUICE_ERROR_INVALID_ARGUMENT, "0 counters");
+    CHECK(sluice_counters_create(ctx, 9, NULL, &c) == SLUICE_ERROR_INVALID_ARGUMENT, "9 counters");
+
+    sluice_context *other = NULL;
+    char msg[256];
+    sluice_context_options o = {0};
+    o.device = "no-such-device-anywhere";
+    CHECK(sluice_context_create(&o, &other, msg, sizeof msg) == SLUICE_ERROR_NO_DEVICE && !other,
+          "unknown device");
+    CHECK(strstr(msg, "no-such-device-anywhere") != NULL, "message names the filter: %s", msg);
+    CHECK(strcmp(sluice_status_string(SLUICE_ERROR_OVERFLOW), "stream overflow") == 0,
+          "status string");
+}
+
+static void test_profile(void)
+{
+    sluice_context *ctx = check_context(1);
+    sluice_program *p = program(ctx);
+    test_split(ctx, p, 4097, 0, SLUICE_UNORDERED);
+    test_split(ctx, p, 4097, 0, SLUICE_ORDERED);
+    sluice_profile_entry e;
+    CHECK(sluice_profile_count(ctx) >= 1, "profile entries");
+    CHECK_OK(ctx, sluice_profile_get(ctx, 0, &e));
+    CHECK(strcmp(e.name, "split3") == 0 && e.launches == 2 && e.records_in == 2 * 4097 &&
+              e.records_out == 2 * 4097 && e.bytes == 4 * 4 * 4097 && e.device_seconds > 0,
+          "profile %s %llu launches %llu in %llu out %llu bytes %g s", e.name,
+          (unsigned long long)e.launches, (unsigned long long)e.records_in,
+          (unsigned long long)e.records_out, (unsigned long long)e.bytes, e.device_seconds);
+    FILE *f = tmpfile();
+    CHECK_OK(ctx, sluice_profile_print(ctx, f));
+    CHECK(ftell(f) > 100, "table printed");
+    fclose(f);
+    CHECK_OK(ctx, sluice_profile_write_json(ctx, "test_runtime_profile.json"));
+    f = fopen("test_runtime_profile.json", "r");
+    char buf[4096] = {0};
+    if (f) {
+        size_t got = fread(buf, 1, sizeof buf - 1, f);
+        buf[got] = 0;
+        fclose(f);
+    }
+    CHECK(strstr(buf, "\"name\": \"split3\"") && strstr(buf, "\"records_in\": 8194"), "json: %s",
+          buf);
+    CHECK(sluice_profile_write_json(ctx, "/nonexistent/dir/p.json") == SLUICE_ERROR_IO,
+          "unwritable json path");
+    sluice_program_destroy(p);
+    sluice_context_destroy(ctx);
+}
+
+int main(void)
+{
+    sluice_context *ctx = check_context(0);
+    sluice_program *p = program(ctx);
+    test_streams(ctx);
+    test_map(ctx, p);
+    const size_t sizes[] = {0, 1, 7, 1023, 1025, 65535, 65537, 1u << 20};
+    for (size_t i = 0; i < sizeof sizes / sizeof *sizes; ++i)
+        for (int pattern = 0; pattern < 4; ++pattern)
+            for (int m = 0; m < 2; ++m)
+                test_split(ctx, p, sizes[i], pattern, m ? SLUICE_UNORDERED : SLUICE_ORDERED);
+    test_multi_emit(ctx, p, SLUICE_ORDERED);
+    test_multi_emit(ctx, p, SLUICE_UNORDERED);
+    test_loop(ctx, p);
+    test_errors(ctx);
+    sluice_program_destroy(p);
+    sluice_context_destroy(ctx);
+    test_profile();
+    return check_summary();
+}

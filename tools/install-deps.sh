@@ -1,0 +1,21 @@
+#!/bin/sh
+# Installs the Debian 12 packages Sluice needs, only when some are missing.
+# Idempotent; uses sudo when not run as root.
+set -eu
+PKGS="build-essential pkg-config meson ninja-build cmake python3
+ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo"
+missing=""
+for p in $PKGS; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
+done
+[ -z "$missing" ] && exit 0
+echo "installing:$missing"
+SUDO=""
+if [ "$(id -u)" != 0 ]; then
+    command -v sudo >/dev/null 2>&1 || { echo "error: need root or sudo to install:$missing" >&2; exit 1; }
+    SUDO=sudo
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -q
+# shellcheck disable=SC2086
+$SUDO apt-get install -y -q --no-install-recommends $missing
