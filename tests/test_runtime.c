@@ -92,7 +92,8 @@ static void test_streams(sluice_context *ctx)
     sluice_device_info info;
     sluice_context_device(ctx, &info);
     sluice_stream *huge = NULL;
-    sluice_status st = sluice_stream_create(ctx, 1024, (size_t)(info.global_mem_bytes / 512), &huge);
+    sluice_status st =
+        sluice_stream_create(ctx, 1024, (size_t)(info.global_mem_bytes / 512), &huge);
     CHECK(st == SLUICE_ERROR_OUT_OF_MEMORY && !huge, "huge stream: %s", sluice_status_string(st));
     CHECK(strstr(sluice_context_error(ctx), "bytes") != NULL, "message: %s",
           sluice_context_error(ctx));
@@ -185,9 +186,9 @@ static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pat
         ref[j] = malloc((n + 1) * 4);
     for (size_t i = 0; i < n; ++i) {
         uint32_t x = pattern == 0   ? check_rand(&seed)
-                     : pattern == 1 ? 7u                        /* all equal: one output */
-                     : pattern == 2 ? (uint32_t)(3 * i)         /* everything to output 0 */
-                                    : (uint32_t)(n - i);        /* reverse */
+                     : pattern == 1 ? 7u                 /* all equal: one output */
+                     : pattern == 2 ? (uint32_t)(3 * i)  /* everything to output 0 */
+                                    : (uint32_t)(n - i); /* reverse */
         in[i] = x;
         ref[x % 3][rn[x % 3]++] = x;
         odd += x & 1u;
@@ -205,8 +206,8 @@ static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pat
     for (int j = 0; j < 3; ++j) {
         size_t len = 0;
         CHECK_OK(ctx, sluice_stream_download(s_out[j], got, n, &len));
-        CHECK(len == rn[j], "n=%zu pattern %d output %d: length %zu, want %zu", n, pattern, j,
-              len, rn[j]);
+        CHECK(len == rn[j], "n=%zu pattern %d output %d: length %zu, want %zu", n, pattern, j, len,
+              rn[j]);
         if (mode == SLUICE_UNORDERED) {
             qsort(got, len, 4, cmp_u32);
             qsort(ref[j], rn[j], 4, cmp_u32);
@@ -260,13 +261,12 @@ static void test_multi_emit(sluice_context *ctx, sluice_program *p, sluice_outpu
         qsort(got + 2, len - 2, 4, cmp_u32);
         qsort(ref + 2, rn - 2, 4, cmp_u32);
     }
-    CHECK(len == rn && memcmp(got, ref, rn * 4) == 0, "multi-emit: length %zu want %zu", len,
-          rn);
+    CHECK(len == rn && memcmp(got, ref, rn * 4) == 0, "multi-emit: length %zu want %zu", len, rn);
     /* Second launch into a full stream: overflow is reported, nothing crashes. */
     CHECK_OK(ctx, sluice_kernel_launch(k));
     sluice_status st = sluice_stream_download(o, got, rn, &len);
-    CHECK(st == SLUICE_ERROR_OVERFLOW && len == rn, "overflow: %s, %zu",
-          sluice_status_string(st), len);
+    CHECK(st == SLUICE_ERROR_OVERFLOW && len == rn, "overflow: %s, %zu", sluice_status_string(st),
+          len);
     CHECK(memcmp(got, ref, 2 * 4) == 0, "records before the overflow are intact");
     sluice_stream_destroy(a);
     sluice_stream_destroy(o);
@@ -343,8 +343,8 @@ static void test_loop(sluice_context *ctx, sluice_program *p)
     size_t alive = 0;
     for (size_t i = 0; i < n; ++i)
         alive += in[i] / 2 > 1;
-    CHECK(ps && ps->values[0] == alive && ps->values[1] == alive,
-          "pass 0 values %u %u, want %zu", ps ? ps->values[0] : 0, ps ? ps->values[1] : 0, alive);
+    CHECK(ps && ps->values[0] == alive && ps->values[1] == alive, "pass 0 values %u %u, want %zu",
+          ps ? ps->values[0] : 0, ps ? ps->values[1] : 0, alive);
     CHECK(sluice_loop_pass(loop, want) == NULL, "no stats past the end");
     sluice_loop_destroy(loop);
 
@@ -394,9 +394,10 @@ static void test_errors(sluice_context *ctx)
     CHECK(sluice_program_create_file(ctx, "/nonexistent/k.cl", NULL, &p) == SLUICE_ERROR_IO,
           "missing file");
     CHECK(strstr(sluice_context_error(ctx), "/nonexistent/k.cl") != NULL, "names the file");
-    CHECK_OK(ctx, sluice_program_create_source(ctx, "ok.cl", "#include <sluice.cl>\n"
-                                                             "__kernel void f(SLUICE_PARAMS, global uint *x)\n"
-                                                             "{ SLUICE_FOR_EACH(i) x[i] = 1u; }\n",
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "ok.cl",
+                                               "#include <sluice.cl>\n"
+                                               "__kernel void f(SLUICE_PARAMS, global uint *x)\n"
+                                               "{ SLUICE_FOR_EACH(i) x[i] = 1u; }\n",
                                                NULL, &p));
     CHECK(sluice_kernel_create(p, "nope", &k) == SLUICE_ERROR_NOT_FOUND, "unknown kernel");
     CHECK(sluice_kernel_create(NULL, "f", &k) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL program");

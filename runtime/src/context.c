@@ -91,7 +91,8 @@ static int contains_nocase(const char *hay, const char *needle)
     size_t n = strlen(needle);
     for (; *hay; ++hay) {
         size_t i = 0;
-        while (i < n && hay[i] && tolower((unsigned char)hay[i]) == tolower((unsigned char)needle[i]))
+        while (i < n && hay[i] &&
+               tolower((unsigned char)hay[i]) == tolower((unsigned char)needle[i]))
             ++i;
         if (i == n)
             return 1;
@@ -188,12 +189,12 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     ctx->cl = clCreateContext(props, 1, &ps.d, NULL, NULL, &err);
     if (!ctx->cl)
         goto cl_error;
-    ctx->queue = clCreateCommandQueue(ctx->cl, ps.d, opt.profile ? CL_QUEUE_PROFILING_ENABLE : 0,
-                                      &err);
+    ctx->queue =
+        clCreateCommandQueue(ctx->cl, ps.d, opt.profile ? CL_QUEUE_PROFILING_ENABLE : 0, &err);
     if (!ctx->queue)
         goto cl_error;
-    ctx->vars = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, SL_VAR_POOL * sizeof(cl_uint), NULL,
-                               &err);
+    ctx->vars =
+        clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, SL_VAR_POOL * sizeof(cl_uint), NULL, &err);
     if (!ctx->vars)
         goto cl_error;
     ctx->var_used = calloc(SL_VAR_POOL, 1);
@@ -267,6 +268,11 @@ sluice_status sluice_context_finish(sluice_context *ctx)
     return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "clFinish");
 }
 
+size_t sluice_context_scratch_bytes(const sluice_context *ctx)
+{
+    return ctx ? ctx->scratch_bytes : 0;
+}
+
 void *sluice_context_cl_context(sluice_context *ctx)
 {
     return ctx ? (void *)ctx->cl : NULL;
@@ -318,9 +324,9 @@ sluice_status sl_vars_read(sluice_context *ctx, cl_uint first, size_t count, cl_
 
 sluice_status sl_vars_fill(sluice_context *ctx, cl_uint first, size_t count, cl_uint value)
 {
-    cl_int err = clEnqueueFillBuffer(ctx->queue, ctx->vars, &value, sizeof value,
-                                     first * sizeof(cl_uint), count * sizeof(cl_uint), 0, NULL,
-                                     NULL);
+    cl_int err =
+        clEnqueueFillBuffer(ctx->queue, ctx->vars, &value, sizeof value, first * sizeof(cl_uint),
+                            count * sizeof(cl_uint), 0, NULL, NULL);
     return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "setting device variables");
 }
 
@@ -328,7 +334,7 @@ sluice_status sl_scratch_reserve(sluice_context *ctx, size_t bytes)
 {
     if (bytes <= ctx->scratch_bytes)
         return SLUICE_OK;
-    size_t want = bytes < 65536 ? 65536 : bytes + bytes / 2;
+    size_t want = bytes < 4096 ? 4096 : bytes;
     cl_int err;
     cl_mem m = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, want, NULL, &err);
     if (!m)

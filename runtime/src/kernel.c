@@ -98,8 +98,8 @@ static sluice_status check_arg(sluice_kernel *k, unsigned arg)
 {
     if (arg >= k->n_args)
         return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "kernel %s has %u arguments; argument %u does not exist", k->name,
-                       k->n_args, arg);
+                       "kernel %s has %u arguments; argument %u does not exist", k->name, k->n_args,
+                       arg);
     return SLUICE_OK;
 }
 
@@ -121,8 +121,8 @@ static sluice_status bind_stream(sluice_kernel *k, unsigned arg, sluice_stream *
         return st;
     if (!stream || stream->ctx != k->ctx)
         return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "kernel %s argument %u: NULL stream or a stream of another context",
-                       k->name, arg);
+                       "kernel %s argument %u: NULL stream or a stream of another context", k->name,
+                       arg);
     unbind_roles(k, arg);
     k->arg_kind[arg] = SL_ARG_STREAM;
     k->arg_stream[arg] = stream;
@@ -264,8 +264,8 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
                        k->name);
     for (unsigned a = 0; a < k->n_args; ++a)
         if (k->arg_kind[a] == SL_ARG_UNSET)
-            return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                           "kernel %s: argument %u is not set", k->name, a);
+            return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "kernel %s: argument %u is not set",
+                           k->name, a);
     if (has_count && count > 0xfffffff0u)
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "kernel %s: count %zu is too large",
                        k->name, count);
@@ -278,8 +278,8 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         L.in_var = 0;
         bound = count;
     } else if (k->input->len_known) {
-        L.n_fixed = (cl_uint)(k->input->len < k->input->capacity ? k->input->len
-                                                                 : k->input->capacity);
+        L.n_fixed =
+            (cl_uint)(k->input->len < k->input->capacity ? k->input->len : k->input->capacity);
         L.in_var = k->input->var;
         bound = L.n_fixed;
     } else {
@@ -321,8 +321,8 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
     for (unsigned a = 0; a < k->n_args; ++a) {
         if (k->arg_kind[a] != SL_ARG_STREAM)
             continue;
-        cl_int err = clSetKernelArg(k->cl, SL_HIDDEN_ARGS + a, sizeof(cl_mem),
-                                    &k->arg_stream[a]->mem);
+        cl_int err =
+            clSetKernelArg(k->cl, SL_HIDDEN_ARGS + a, sizeof(cl_mem), &k->arg_stream[a]->mem);
         if (err != CL_SUCCESS)
             return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                            "kernel %s argument %u is not a global buffer: %s", k->name, a,
@@ -333,7 +333,11 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
     cl_event ev = NULL;
     if (bound > 0) {
         if (L.ordered_mask) {
-            st = sl_scratch_reserve(ctx, (size_t)SLUICE_MAX_OUTPUTS * L.stride * sizeof(cl_uint));
+            size_t rows = 0; /* rows up to the highest ordered slot */
+            for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
+                if ((L.ordered_mask >> s) & 1u)
+                    rows = s + 1;
+            st = sl_scratch_reserve(ctx, rows * L.stride * sizeof(cl_uint));
             if (st != SLUICE_OK)
                 return st;
             /* Count launch, scan of the chunk counts, write launch. */
@@ -384,9 +388,9 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         if (L.n_fixed != SL_NONE) {
             st = sluice_stream_set_length(m, L.n_fixed);
         } else {
-            cl_int err = clEnqueueCopyBuffer(ctx->queue, ctx->vars, ctx->vars,
-                                             L.in_var * sizeof(cl_uint), m->var * sizeof(cl_uint),
-                                             sizeof(cl_uint), 0, NULL, NULL);
+            cl_int err =
+                clEnqueueCopyBuffer(ctx->queue, ctx->vars, ctx->vars, L.in_var * sizeof(cl_uint),
+                                    m->var * sizeof(cl_uint), sizeof(cl_uint), 0, NULL, NULL);
             if (err != CL_SUCCESS)
                 st = sl_cl_fail(ctx, err, "copying a mapped output's length");
             m->len_known = false;

@@ -29,8 +29,8 @@ static int is_sluice_include(const char *line, size_t len)
     i += 7;
     while (i < len && (line[i] == ' ' || line[i] == '\t'))
         ++i;
-    return (len - i >= 11) &&
-           (strncmp(line + i, "\"sluice.cl\"", 11) == 0 || strncmp(line + i, "<sluice.cl>", 11) == 0);
+    return (len - i >= 11) && (strncmp(line + i, "\"sluice.cl\"", 11) == 0 ||
+                               strncmp(line + i, "<sluice.cl>", 11) == 0);
 }
 
 /* The text handed to the compiler: the embedded sluice.cl, a #line directive
@@ -95,8 +95,8 @@ sluice_status sluice_program_create_source(sluice_context *ctx, const char *name
     return SLUICE_OK;
 }
 
-sluice_status sluice_program_create_file(sluice_context *ctx, const char *path,
-                                         const char *options, sluice_program **out)
+sluice_status sluice_program_create_file(sluice_context *ctx, const char *path, const char *options,
+                                         sluice_program **out)
 {
     if (out)
         *out = NULL;

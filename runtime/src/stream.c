@@ -122,8 +122,8 @@ sluice_status sluice_stream_upload(sluice_stream *s, const void *records, size_t
         return sl_fail(s->ctx, SLUICE_ERROR_OVERFLOW,
                        "uploading %zu records into a stream of capacity %zu", count, s->capacity);
     if (count) {
-        cl_int err = clEnqueueWriteBuffer(s->ctx->queue, s->mem, CL_TRUE, 0,
-                                          count * s->record_size, records, 0, NULL, NULL);
+        cl_int err = clEnqueueWriteBuffer(s->ctx->queue, s->mem, CL_TRUE, 0, count * s->record_size,
+                                          records, 0, NULL, NULL);
         if (err != CL_SUCCESS)
             return sl_cl_fail(s->ctx, err, "uploading a stream");
     }

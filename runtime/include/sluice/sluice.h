@@ -70,15 +70,15 @@ const char *sluice_status_string(sluice_status status);
 
 /** What sluice_devices_list() reports about one OpenCL device. */
 typedef struct sluice_device_info {
-    char platform[128];          /**< platform name */
-    char name[128];              /**< device name */
-    char version[128];           /**< OpenCL C version string */
-    int is_cpu;                  /**< 1 for CL_DEVICE_TYPE_CPU */
-    unsigned compute_units;      /**< CL_DEVICE_MAX_COMPUTE_UNITS */
-    size_t max_work_group_size;  /**< CL_DEVICE_MAX_WORK_GROUP_SIZE */
-    uint64_t global_mem_bytes;   /**< CL_DEVICE_GLOBAL_MEM_SIZE */
-    uint64_t max_alloc_bytes;    /**< CL_DEVICE_MAX_MEM_ALLOC_SIZE */
-    uint64_t local_mem_bytes;    /**< CL_DEVICE_LOCAL_MEM_SIZE */
+    char platform[128];         /**< platform name */
+    char name[128];             /**< device name */
+    char version[128];          /**< OpenCL C version string */
+    int is_cpu;                 /**< 1 for CL_DEVICE_TYPE_CPU */
+    unsigned compute_units;     /**< CL_DEVICE_MAX_COMPUTE_UNITS */
+    size_t max_work_group_size; /**< CL_DEVICE_MAX_WORK_GROUP_SIZE */
+    uint64_t global_mem_bytes;  /**< CL_DEVICE_GLOBAL_MEM_SIZE */
+    uint64_t max_alloc_bytes;   /**< CL_DEVICE_MAX_MEM_ALLOC_SIZE */
+    uint64_t local_mem_bytes;   /**< CL_DEVICE_LOCAL_MEM_SIZE */
 } sluice_device_info;
 
 /**
@@ -124,6 +124,10 @@ sluice_status sluice_context_device(const sluice_context *ctx, sluice_device_inf
 
 /** Blocks until everything queued on the context has finished. */
 sluice_status sluice_context_finish(sluice_context *ctx);
+
+/** Bytes of device scratch the context holds for ordered outputs (the
+ *  per-chunk counts); it grows to the largest launch and is kept. */
+size_t sluice_context_scratch_bytes(const sluice_context *ctx);
 
 /** The underlying OpenCL objects, for interoperation (cl_context,
  *  cl_command_queue and cl_device_id, returned as void* so this header does
@@ -210,8 +214,8 @@ sluice_status sluice_program_create_source(sluice_context *ctx, const char *name
 
 /** Like sluice_program_create_source(), reading the source from `path`. A
  *  missing file gives SLUICE_ERROR_IO naming the path. */
-sluice_status sluice_program_create_file(sluice_context *ctx, const char *path,
-                                         const char *options, sluice_program **out);
+sluice_status sluice_program_create_file(sluice_context *ctx, const char *path, const char *options,
+                                         sluice_program **out);
 
 /** Frees the program. Kernels made from it must be destroyed first. */
 void sluice_program_destroy(sluice_program *program);
@@ -250,8 +254,7 @@ typedef enum sluice_output_mode {
  * kernel's parameters must start with SLUICE_PARAMS (sluice.cl). Argument
  * indices below count the parameters written after SLUICE_PARAMS, from 0.
  */
-sluice_status sluice_kernel_create(sluice_program *program, const char *name,
-                                   sluice_kernel **out);
+sluice_status sluice_kernel_create(sluice_program *program, const char *name, sluice_kernel **out);
 
 /** Frees the kernel (NULL is fine). */
 void sluice_kernel_destroy(sluice_kernel *kernel);
@@ -337,21 +340,21 @@ typedef unsigned (*sluice_oracle_fn)(void *user, unsigned pass, const uint32_t *
 
 /** What a loop runs and watches. Zero-initialise, then set fields. */
 typedef struct sluice_loop_desc {
-    sluice_pass_fn pass;                /**< required */
-    sluice_oracle_fn oracle;            /**< optional */
-    void *user;                         /**< handed to pass and oracle */
-    sluice_stream *const *streams;      /**< lengths to watch (may be NULL) */
-    size_t stream_count;                /**< how many */
-    sluice_counters *counters;          /**< counters to watch (may be NULL) */
-    int reset_counters;                 /**< non-zero: zero them before each pass */
-    unsigned max_passes;                /**< 0: 100000 */
+    sluice_pass_fn pass;           /**< required */
+    sluice_oracle_fn oracle;       /**< optional */
+    void *user;                    /**< handed to pass and oracle */
+    sluice_stream *const *streams; /**< lengths to watch (may be NULL) */
+    size_t stream_count;           /**< how many */
+    sluice_counters *counters;     /**< counters to watch (may be NULL) */
+    int reset_counters;            /**< non-zero: zero them before each pass */
+    unsigned max_passes;           /**< 0: 100000 */
 } sluice_loop_desc;
 
 /** Per-pass statistics kept by a loop. */
 typedef struct sluice_pass_stats {
-    unsigned choice;             /**< what the pass function was given */
-    uint32_t values[16];         /**< watched values after the pass (first 16) */
-    double seconds;              /**< host wall time from queueing to values read */
+    unsigned choice;     /**< what the pass function was given */
+    uint32_t values[16]; /**< watched values after the pass (first 16) */
+    double seconds;      /**< host wall time from queueing to values read */
 } sluice_pass_stats;
 
 typedef struct sluice_loop sluice_loop;
@@ -385,12 +388,12 @@ const sluice_pass_stats *sluice_loop_pass(const sluice_loop *loop, unsigned inde
 
 /** Per-kernel totals kept when profiling is on. */
 typedef struct sluice_profile_entry {
-    char name[64];          /**< kernel name */
-    uint64_t launches;      /**< launches queued (an ordered launch counts once) */
-    uint64_t records_in;    /**< input records processed */
-    uint64_t records_out;   /**< records emitted to conditional outputs */
-    uint64_t bytes;         /**< input and emitted bytes */
-    double device_seconds;  /**< summed OpenCL event time */
+    char name[64];         /**< kernel name */
+    uint64_t launches;     /**< launches queued (an ordered launch counts once) */
+    uint64_t records_in;   /**< input records processed */
+    uint64_t records_out;  /**< records emitted to conditional outputs */
+    uint64_t bytes;        /**< input and emitted bytes */
+    double device_seconds; /**< summed OpenCL event time */
 } sluice_profile_entry;
 
 /** Non-zero if the context profiles launches. */

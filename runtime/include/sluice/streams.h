@@ -25,11 +25,7 @@ typedef enum sluice_scalar_type {
 } sluice_scalar_type;
 
 /** Reduction operators. */
-typedef enum sluice_reduce_op {
-    SLUICE_SUM = 0,
-    SLUICE_MIN = 1,
-    SLUICE_MAX = 2
-} sluice_reduce_op;
+typedef enum sluice_reduce_op { SLUICE_SUM = 0, SLUICE_MIN = 1, SLUICE_MAX = 2 } sluice_reduce_op;
 
 /** Prefix sum of a scalar stream into `out` (capacity >= input length; may
  *  not be `in`). Exclusive: out[i] = in[0] + ... + in[i-1], out[0] = 0.
@@ -82,8 +78,8 @@ sluice_status sluice_cell_index_search(sluice_context *ctx, sluice_stream *sorte
 
 /** The same index built by counting: a histogram of the keys (which need not
  *  be sorted) and an exclusive scan. */
-sluice_status sluice_cell_index_count(sluice_context *ctx, sluice_stream *keys,
-                                      uint32_t cell_count, sluice_stream *start);
+sluice_status sluice_cell_index_count(sluice_context *ctx, sluice_stream *keys, uint32_t cell_count,
+                                      sluice_stream *start);
 
 /** Bounded routing, the stencil-routing primitive of Purcell 6.2.2: each
  *  record of `values` (uint32 payloads) goes to bucket keys[i] (< bucket_count,
