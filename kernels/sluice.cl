@@ -48,18 +48,18 @@
 /* Launch parameters filled in by the host runtime (runtime/src/kernel.c keeps
  * the same layout). All fields are uint so host and device agree on layout. */
 typedef struct sluice_launch_ {
-    uint n_fixed;        /* input length when the host knows it, else SLUICE_NONE */
-    uint in_var;         /* index of the input length in the variable pool */
-    uint chunk;          /* records per work-item */
-    uint mode;           /* 0: one launch, 1: ordered count launch, 2: ordered write */
-    uint first_pass;     /* 0 when the count pass runs, else 1 */
-    uint ordered_mask;   /* bit k: output k is ordered */
-    uint out_mask;       /* bit k: output k is bound */
-    uint counter_var;    /* first counter in the pool, or SLUICE_NONE */
-    uint n_counters;     /* counters bound */
-    uint prof_var;       /* profile variables (records in, out[8]) or SLUICE_NONE */
-    uint stride;         /* chunks + 1: scratch row length per ordered output */
-    uint reserved;       /* keeps the struct a multiple of 8 bytes */
+    uint n_fixed;                     /* input length when the host knows it, else SLUICE_NONE */
+    uint in_var;                      /* index of the input length in the variable pool */
+    uint chunk;                       /* records per work-item */
+    uint mode;                        /* 0: one launch, 1: ordered count launch, 2: ordered write */
+    uint first_pass;                  /* 0 when the count pass runs, else 1 */
+    uint ordered_mask;                /* bit k: output k is ordered */
+    uint out_mask;                    /* bit k: output k is bound */
+    uint counter_var;                 /* first counter in the pool, or SLUICE_NONE */
+    uint n_counters;                  /* counters bound */
+    uint prof_var;                    /* profile variables (records in, out[8]) or SLUICE_NONE */
+    uint stride;                      /* chunks + 1: scratch row length per ordered output */
+    uint reserved;                    /* keeps the struct a multiple of 8 bytes */
     uint out_var[SLUICE_MAX_OUTPUTS]; /* output lengths in the pool */
     uint out_cap[SLUICE_MAX_OUTPUTS]; /* output capacities (records) */
 } sluice_launch_;
@@ -146,7 +146,8 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
 #define SLUICE_FOR_EACH(id)                                                                        \
     sluice_state_ sluice_s_;                                                                       \
     sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_);                          \
-    for (; sluice_s_.pass < 2u; sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_)) \
+    for (; sluice_s_.pass < 2u;                                                                    \
+         sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
         for (uint id = sluice_s_.begin; id < sluice_s_.end; ++id)
 
 /* True in the pass that writes (always true for kernels without conditional
