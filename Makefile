@@ -21,7 +21,7 @@ build: deps $(BUILD)/build.ninja
 	ninja -C $(BUILD)
 
 demo: build
-	$(BUILD)/apps/sluice-info
+	$(BUILD)/apps/examples/split_sign/split_sign --count 10000000 --profile
 
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure
