@@ -1,1 +1,56 @@
-/* placeholder */
+/*
+ * Reductions (streams/reduce.c) over contiguous chunks:
+ *
+ *   pass 1  reduce_part_OP_T   one work-item per chunk reduces its records,
+ *                              four at a time, into parts[id]
+ *   pass 2  reduce_final_OP_T  one work-item reduces parts[0..m) into parts[m]
+ *
+ * Empty chunks give the identity, so an empty stream reduces to it. Float MIN
+ * and MAX use fmin/fmax: a NaN is ignored unless every record is NaN.
+ *
+ * The input length is `n_fixed` when the host knows it, otherwise the
+ * device-side variable vars[in_var], clamped to `limit` (the capacity).
+ */
+
+#define REDUCE_NONE 0xffffffffu
+
+inline uint reduce_length_(global const uint *vars, uint in_var, uint n_fixed, uint limit)
+{
+    return n_fixed != REDUCE_NONE ? n_fixed : min(vars[in_var], limit);
+}
+
+#define REDUCE_KERNELS(T, T4, NAME, IDENTITY, OP)                                                  \
+    __kernel void reduce_part_##NAME(global const uint *vars, uint in_var, uint n_fixed,           \
+                                     uint limit, uint chunk, global const T *in, global T *parts)  \
+    {                                                                                              \
+        uint n = reduce_length_(vars, in_var, n_fixed, limit);                                     \
+        ulong b = (ulong)get_global_id(0) * chunk;                                                 \
+        uint begin = (uint)min(b, (ulong)n), end = (uint)min(b + chunk, (ulong)n);                 \
+        T4 acc = (T4)(IDENTITY);                                                                   \
+        uint i = begin;                                                                            \
+        for (; i + 4u <= end; i += 4u)                                                             \
+            acc = OP(acc, vload4(0, in + i));                                                      \
+        T r = OP(OP(acc.s0, acc.s1), OP(acc.s2, acc.s3));                                          \
+        for (; i < end; ++i)                                                                       \
+            r = OP(r, in[i]);                                                                      \
+        parts[get_global_id(0)] = r;                                                               \
+    }                                                                                              \
+                                                                                                   \
+    __kernel void reduce_final_##NAME(global T *parts, uint m)                                     \
+    {                                                                                              \
+        if (get_global_id(0) != 0)                                                                 \
+            return;                                                                                \
+        T r = (T)(IDENTITY);                                                                       \
+        for (uint i = 0; i < m; ++i)                                                               \
+            r = OP(r, parts[i]);                                                                   \
+        parts[m] = r;                                                                              \
+    }
+
+#define REDUCE_ADD_(a, b) ((a) + (b))
+
+REDUCE_KERNELS(uint, uint4, sum_u32, 0u, REDUCE_ADD_)
+REDUCE_KERNELS(uint, uint4, min_u32, 0xffffffffu, min)
+REDUCE_KERNELS(uint, uint4, max_u32, 0u, max)
+REDUCE_KERNELS(float, float4, sum_f32, 0.0f, REDUCE_ADD_)
+REDUCE_KERNELS(float, float4, min_f32, INFINITY, fmin)
+REDUCE_KERNELS(float, float4, max_f32, -INFINITY, fmax)

@@ -48,18 +48,18 @@
 /* Launch parameters filled in by the host runtime (runtime/src/kernel.c keeps
  * the same layout). All fields are uint so host and device agree on layout. */
 typedef struct sluice_launch_ {
-    uint n_fixed;                     /* input length when the host knows it, else SLUICE_NONE */
-    uint in_var;                      /* index of the input length in the variable pool */
-    uint chunk;                       /* records per work-item */
-    uint mode;                        /* 0: one launch, 1: ordered count launch, 2: ordered write */
-    uint first_pass;                  /* 0 when the count pass runs, else 1 */
-    uint ordered_mask;                /* bit k: output k is ordered */
-    uint out_mask;                    /* bit k: output k is bound */
-    uint counter_var;                 /* first counter in the pool, or SLUICE_NONE */
-    uint n_counters;                  /* counters bound */
-    uint prof_var;                    /* profile variables (records in, out[8]) or SLUICE_NONE */
-    uint stride;                      /* chunks + 1: scratch row length per ordered output */
-    uint reserved;                    /* keeps the struct a multiple of 8 bytes */
+    uint n_fixed;      /* input length when the host knows it, else SLUICE_NONE */
+    uint in_var;       /* index of the input length in the variable pool */
+    uint chunk;        /* records per work-item */
+    uint mode;         /* 0: one launch, 1: ordered count launch, 2: ordered write */
+    uint first_pass;   /* 0 when the count pass runs, else 1 */
+    uint ordered_mask; /* bit k: output k is ordered */
+    uint out_mask;     /* bit k: output k is bound */
+    uint counter_var;  /* first counter in the pool, or SLUICE_NONE */
+    uint n_counters;   /* counters bound */
+    uint prof_var;     /* profile variables (records in, out[8]) or SLUICE_NONE */
+    uint stride;       /* chunks + 1: scratch row length per ordered output */
+    uint in_cap;       /* input capacity: a device length past it (overflow) is capped */
     uint out_var[SLUICE_MAX_OUTPUTS]; /* output lengths in the pool */
     uint out_cap[SLUICE_MAX_OUTPUTS]; /* output capacities (records) */
 } sluice_launch_;
@@ -78,7 +78,7 @@ typedef struct sluice_state_ {
 inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
                           const sluice_launch_ *L)
 {
-    uint n = L->n_fixed != SLUICE_NONE ? L->n_fixed : vars[L->in_var];
+    uint n = L->n_fixed != SLUICE_NONE ? L->n_fixed : min(vars[L->in_var], L->in_cap);
     uint id = (uint)get_global_id(0);
     ulong b = (ulong)id * L->chunk;
     s->chunk_id = id;
@@ -198,6 +198,7 @@ inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
 
 /* The number of input records of this launch. */
 #define SLUICE_LENGTH                                                                              \
-    (sluice_L_.n_fixed != SLUICE_NONE ? sluice_L_.n_fixed : sluice_vars_[sluice_L_.in_var])
+    (sluice_L_.n_fixed != SLUICE_NONE ? sluice_L_.n_fixed                                          \
+                                      : min(sluice_vars_[sluice_L_.in_var], sluice_L_.in_cap))
 
 #endif /* SLUICE_CL_INCLUDED */

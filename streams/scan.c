@@ -1,2 +1,175 @@
-/* placeholder: being written */
-typedef int sl_placeholder_scan;
+/* Prefix sums of scalar streams: reduce-then-scan over contiguous chunks
+ * (kernels/scan.cl). Each work-item owns one chunk of records and walks it in
+ * a plain loop, which is what runs fast on a CPU device; the chunk sums are
+ * scanned by a single work-item in between. */
+#include "internal.h"
+#include "sluice/streams.h"
+
+#include <string.h>
+
+/* Work-items per work-group of the scan launches. */
+#define SCAN_LOCAL 8u
+
+/* Records per chunk for an input of at most `bound` records: about
+ * sqrt(bound) records (at least 1024, a multiple of 64), so that there are a
+ * few thousand chunks for large inputs (both cores busy, a small pass 2) and
+ * float sums go through short chains of additions (chunk + chunk count). */
+static size_t scan_chunk(size_t bound)
+{
+    size_t c = 1024;
+    while (c * c < bound)
+        c *= 2;
+    return c;
+}
+
+/* Sets argument `i` of `k` and accumulates the first error in `*err`. */
+static void set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *err)
+{
+    if (*err == CL_SUCCESS)
+        *err = clSetKernelArg(k, i, size, value);
+}
+
+/* Everything one scan or reduce call needs about its input: the length (known
+ * on the host, or only on the device) and the chunking derived from it. */
+typedef struct scan_input {
+    cl_uint n_fixed; /* length, or SL_NONE when it is only on the device */
+    cl_uint in_var;
+    cl_uint limit; /* capacity: clamps a device-side length */
+    size_t bound;  /* most records the input may have */
+    size_t chunk, global;
+} scan_input;
+
+static void scan_input_init(sluice_stream *in, scan_input *si)
+{
+    si->in_var = in->var;
+    si->limit = (cl_uint)in->capacity;
+    if (in->len_known) {
+        si->bound = in->len < in->capacity ? in->len : in->capacity;
+        si->n_fixed = (cl_uint)si->bound;
+    } else {
+        si->bound = in->capacity;
+        si->n_fixed = SL_NONE;
+    }
+    si->chunk = scan_chunk(si->bound);
+    size_t chunks = (si->bound + si->chunk - 1) / si->chunk;
+    si->global = sl_round_up(chunks ? chunks : 1, SCAN_LOCAL);
+}
+
+sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream *out,
+                          sluice_scalar_type type, int inclusive, void *total)
+{
+    if (!ctx)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (!in || !out)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "sluice_scan: NULL %s stream",
+                       !in ? "input" : "output");
+    if (in->ctx != ctx || out->ctx != ctx)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_scan: a stream belongs to another context");
+    if (in == out)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_scan: the output may not be the input stream");
+    if (type != SLUICE_U32 && type != SLUICE_F32)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "sluice_scan: bad scalar type %d",
+                       (int)type);
+    if (in->record_size != 4 || out->record_size != 4)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_scan: records must be 4 bytes (input has %zu, output %zu)",
+                       in->record_size, out->record_size);
+
+    scan_input si;
+    scan_input_init(in, &si);
+    if (out->capacity < si.bound) {
+        /* The input may still fit once its device-side length is known. */
+        size_t len;
+        sluice_status st = sluice_stream_length(in, &len);
+        if (st != SLUICE_OK)
+            return st;
+        scan_input_init(in, &si);
+        if (out->capacity < si.bound)
+            return sl_fail(ctx, SLUICE_ERROR_OVERFLOW,
+                           "sluice_scan: output capacity %zu is too small for the %zu input "
+                           "records",
+                           out->capacity, si.bound);
+    }
+
+    if (si.n_fixed == 0) { /* empty input: nothing to launch */
+        sluice_status st = sluice_stream_set_length(out, 0);
+        if (st == SLUICE_OK && total)
+            memset(total, 0, 4);
+        return st;
+    }
+
+    const char *sfx = type == SLUICE_U32 ? "u32" : "f32";
+    char names[3][32];
+    snprintf(names[0], sizeof names[0], "scan_sums_%s", sfx);
+    snprintf(names[1], sizeof names[1], "scan_chunks_%s", sfx);
+    snprintf(names[2], sizeof names[2], "scan_apply_%s", sfx);
+    cl_kernel k[3] = {NULL, NULL, NULL};
+    cl_mem sums = NULL;
+    sluice_status st = SLUICE_OK;
+    for (int i = 0; i < 3 && st == SLUICE_OK; ++i)
+        st = sl_embedded_cl_kernel(ctx, "scan.cl", names[i], &k[i]);
+    cl_int err = CL_SUCCESS;
+    if (st == SLUICE_OK) {
+        sums = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, (si.global + 1) * 4, NULL, &err);
+        if (!sums)
+            st = sl_cl_fail(ctx, err, "sluice_scan: allocating chunk sums");
+    }
+    if (st == SLUICE_OK) {
+        cl_uint chunk = (cl_uint)si.chunk, m = (cl_uint)si.global, incl = inclusive ? 1u : 0u;
+        cl_uint out_var = out->var;
+        /* Pass 1. */
+        set_arg(k[0], 0, sizeof(cl_mem), &ctx->vars, &err);
+        set_arg(k[0], 1, sizeof(cl_uint), &si.in_var, &err);
+        set_arg(k[0], 2, sizeof(cl_uint), &si.n_fixed, &err);
+        set_arg(k[0], 3, sizeof(cl_uint), &si.limit, &err);
+        set_arg(k[0], 4, sizeof(cl_uint), &chunk, &err);
+        set_arg(k[0], 5, sizeof(cl_mem), &in->mem, &err);
+        set_arg(k[0], 6, sizeof(cl_mem), &sums, &err);
+        /* Pass 2. */
+        set_arg(k[1], 0, sizeof(cl_mem), &ctx->vars, &err);
+        set_arg(k[1], 1, sizeof(cl_uint), &si.in_var, &err);
+        set_arg(k[1], 2, sizeof(cl_uint), &si.n_fixed, &err);
+        set_arg(k[1], 3, sizeof(cl_uint), &si.limit, &err);
+        set_arg(k[1], 4, sizeof(cl_uint), &out_var, &err);
+        set_arg(k[1], 5, sizeof(cl_mem), &sums, &err);
+        set_arg(k[1], 6, sizeof(cl_uint), &m, &err);
+        /* Pass 3. */
+        set_arg(k[2], 0, sizeof(cl_mem), &ctx->vars, &err);
+        set_arg(k[2], 1, sizeof(cl_uint), &si.in_var, &err);
+        set_arg(k[2], 2, sizeof(cl_uint), &si.n_fixed, &err);
+        set_arg(k[2], 3, sizeof(cl_uint), &si.limit, &err);
+        set_arg(k[2], 4, sizeof(cl_uint), &chunk, &err);
+        set_arg(k[2], 5, sizeof(cl_mem), &in->mem, &err);
+        set_arg(k[2], 6, sizeof(cl_mem), &out->mem, &err);
+        set_arg(k[2], 7, sizeof(cl_mem), &sums, &err);
+        set_arg(k[2], 8, sizeof(cl_uint), &incl, &err);
+        if (err != CL_SUCCESS)
+            st = sl_cl_fail(ctx, err, "sluice_scan: setting kernel arguments");
+    }
+    if (st == SLUICE_OK)
+        st = sl_enqueue_raw(ctx, k[0], names[0], si.global, SCAN_LOCAL);
+    if (st == SLUICE_OK) {
+        st = sl_enqueue_raw(ctx, k[1], names[1], 1, 1);
+        /* Pass 2 writes the output's length on the device. */
+        out->len_known = si.n_fixed != SL_NONE;
+        out->len = si.n_fixed != SL_NONE ? si.n_fixed : 0;
+    }
+    if (st == SLUICE_OK)
+        st = sl_enqueue_raw(ctx, k[2], names[2], si.global, SCAN_LOCAL);
+    if (st == SLUICE_OK) {
+        if (total) {
+            err = clEnqueueReadBuffer(ctx->queue, sums, CL_TRUE, si.global * 4, 4, total, 0, NULL,
+                                      NULL);
+            if (err != CL_SUCCESS)
+                st = sl_cl_fail(ctx, err, "sluice_scan: reading the total");
+        }
+    }
+    if (sums)
+        clReleaseMemObject(sums);
+    for (int i = 0; i < 3; ++i)
+        if (k[i])
+            clReleaseKernel(k[i]);
+    return st;
+}

@@ -268,6 +268,27 @@ static void test_multi_emit(sluice_context *ctx, sluice_program *p, sluice_outpu
     CHECK(st == SLUICE_ERROR_OVERFLOW && len == rn, "overflow: %s, %zu", sluice_status_string(st),
           len);
     CHECK(memcmp(got, ref, 2 * 4) == 0, "records before the overflow are intact");
+    /* An overflowed stream used as input: only its capacity is read. */
+    sluice_kernel *h = NULL;
+    sluice_stream *ho = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "halve", &h));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, 2 * rn, &ho));
+    sluice_stream_destroy(a); /* forget o's host-side length: reread it on the device */
+    CHECK_OK(ctx, sluice_kernel_set_output(k, 1, 0, o, mode));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &a));
+    CHECK_OK(ctx, sluice_stream_upload(a, in, n));
+    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, a));
+    CHECK_OK(ctx, sluice_kernel_launch(k)); /* o stays over capacity, length on the device */
+    CHECK_OK(ctx, sluice_kernel_set_input(h, 0, o));
+    CHECK_OK(ctx, sluice_kernel_set_output(h, 1, 0, ho, SLUICE_UNORDERED));
+    CHECK_OK(ctx, sluice_kernel_launch(h));
+    size_t want_h = 0, got_h = 0;
+    for (size_t i = 0; i < rn; ++i)
+        want_h += got[i] / 2 > 1;
+    CHECK_OK(ctx, sluice_stream_length(ho, &got_h));
+    CHECK(got_h == want_h, "input past capacity is capped: %zu records, want %zu", got_h, want_h);
+    sluice_stream_destroy(ho);
+    sluice_kernel_destroy(h);
     sluice_stream_destroy(a);
     sluice_stream_destroy(o);
     sluice_kernel_destroy(k);

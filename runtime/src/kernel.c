@@ -285,6 +285,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
     } else {
         L.n_fixed = SL_NONE;
         L.in_var = k->input->var;
+        L.in_cap = (cl_uint)k->input->capacity;
         bound = k->input->capacity;
     }
     /* Mapped outputs must hold the whole input. */
