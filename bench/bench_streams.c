@@ -113,7 +113,7 @@ static const char *copy_src = "#include \"sluice.cl\"\n"
                               "{\n"
                               "    SLUICE_FOR_EACH(i) out[i] = in[i];\n"
                               "}\n"
-                              "__kernel void step(SLUICE_PARAMS, global const uint *in,"
+                              "__kernel void increment(SLUICE_PARAMS, global const uint *in,"
                               " global uint *out)\n"
                               "{\n"
                               "    SLUICE_FOR_EACH(i) out[i] = in[i] + 1u;\n"
@@ -394,7 +394,7 @@ int main(int argc, char **argv)
     sluice_program *prog;
     TRY(sluice_program_create_source(ctx, "bench_copy.cl", copy_src, NULL, &prog));
     TRY(sluice_kernel_create(prog, "copy", &b.copy));
-    TRY(sluice_kernel_create(prog, "step", &b.chain));
+    TRY(sluice_kernel_create(prog, "increment", &b.chain));
 
     result res[16];
     int nr = 0;

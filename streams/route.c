@@ -1,2 +1,137 @@
-/* placeholder: being written */
-typedef int sl_placeholder_route;
+/* Bounded routing (Purcell, thesis 6.2.2, "stencil routing"): every record
+ * goes to its bucket in a single pass, and each bucket keeps at most `slots`
+ * of them. Purcell builds an approximate photon map this way with the
+ * stencil buffer; per-bucket atomic counters do the stencil's job here
+ * (kernels/route.cl). Which records of an overfull bucket survive depends on
+ * the order in which the work-items reach the counter. */
+#include "internal.h"
+#include "sluice/streams.h"
+
+static sluice_status check_stream(sluice_context *ctx, sluice_stream *s, const char *what)
+{
+    if (!s || s->ctx != ctx)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_route_bounded: %s is NULL or belongs to another context", what);
+    if (s->record_size != 4)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_route_bounded: %s has records of %zu bytes; uint32 records (4 "
+                       "bytes) are needed",
+                       what, s->record_size);
+    return SLUICE_OK;
+}
+
+static sluice_status set_args(sluice_context *ctx, cl_kernel k, const char *name, unsigned count,
+                              const size_t *sizes, const void *const *values)
+{
+    for (unsigned i = 0; i < count; ++i) {
+        cl_int err = clSetKernelArg(k, i, sizes[i], values[i]);
+        if (err != CL_SUCCESS) {
+            char what[96];
+            snprintf(what, sizeof what, "setting argument %u of %s", i, name);
+            return sl_cl_fail(ctx, err, what);
+        }
+    }
+    return SLUICE_OK;
+}
+
+#define SIZES(...)                                                                                 \
+    (const size_t[])                                                                               \
+    {                                                                                              \
+        __VA_ARGS__                                                                                \
+    }
+#define VALUES(...)                                                                                \
+    (const void *const[])                                                                          \
+    {                                                                                              \
+        __VA_ARGS__                                                                                \
+    }
+
+sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, sluice_stream *values,
+                                   uint32_t bucket_count, uint32_t slots, sluice_stream *out,
+                                   sluice_stream *fill, sluice_stream *overflow)
+{
+    if (!ctx)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    sluice_status st = check_stream(ctx, keys, "keys");
+    if (st == SLUICE_OK)
+        st = check_stream(ctx, values, "values");
+    if (st == SLUICE_OK)
+        st = check_stream(ctx, out, "out");
+    if (st == SLUICE_OK)
+        st = check_stream(ctx, fill, "fill");
+    if (st == SLUICE_OK)
+        st = check_stream(ctx, overflow, "overflow");
+    if (st != SLUICE_OK)
+        return st;
+    /* The outputs are written while the inputs are read: no sharing. */
+    sluice_stream *all[5] = {keys, values, out, fill, overflow};
+    for (int a = 0; a < 5; ++a)
+        for (int b = a + 1; b < 5; ++b)
+            if (all[a] == all[b] && b >= 2)
+                return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                               "sluice_route_bounded: an output stream is also another argument");
+    size_t total = (size_t)bucket_count * slots;
+    if ((uint64_t)bucket_count * slots > 0xfffffff0u || out->capacity < total)
+        return sl_fail(ctx, SLUICE_ERROR_OVERFLOW,
+                       "sluice_route_bounded: out holds %zu records but %u buckets x %u slots are "
+                       "needed",
+                       out->capacity, bucket_count, slots);
+    if (fill->capacity < bucket_count || overflow->capacity < bucket_count)
+        return sl_fail(ctx, SLUICE_ERROR_OVERFLOW,
+                       "sluice_route_bounded: fill and overflow need %u records each",
+                       bucket_count);
+    size_t n = 0, nv = 0;
+    st = sluice_stream_length(keys, &n);
+    if (st == SLUICE_OK)
+        st = sluice_stream_length(values, &nv);
+    if (st != SLUICE_OK)
+        return st;
+    if (n > keys->capacity)
+        n = keys->capacity;
+    if (nv > values->capacity)
+        nv = values->capacity;
+    if (nv < n)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "sluice_route_bounded: %zu values for %zu keys", nv, n);
+
+    cl_kernel k_scatter = NULL, k_finish = NULL;
+    cl_uint nn = (cl_uint)n, none = 0xffffffffu, zero = 0;
+    cl_int err = CL_SUCCESS;
+    if (total)
+        err = clEnqueueFillBuffer(ctx->queue, out->mem, &none, sizeof none, 0,
+                                  total * sizeof(cl_uint), 0, NULL, NULL);
+    if (err == CL_SUCCESS && bucket_count)
+        err = clEnqueueFillBuffer(ctx->queue, fill->mem, &zero, sizeof zero, 0,
+                                  (size_t)bucket_count * sizeof(cl_uint), 0, NULL, NULL);
+    if (err != CL_SUCCESS)
+        return sl_cl_fail(ctx, err, "clearing the routing outputs");
+    if (bucket_count) {
+        st = sl_embedded_cl_kernel(ctx, "route.cl", "route_scatter", &k_scatter);
+        if (st == SLUICE_OK)
+            st = sl_embedded_cl_kernel(ctx, "route.cl", "route_finish", &k_finish);
+        if (st == SLUICE_OK)
+            st = set_args(ctx, k_scatter, "route_scatter", 7,
+                          SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof nn, sizeof bucket_count,
+                                sizeof slots, sizeof(cl_mem), sizeof(cl_mem)),
+                          VALUES(&keys->mem, &values->mem, &nn, &bucket_count, &slots, &fill->mem,
+                                 &out->mem));
+        if (st == SLUICE_OK)
+            st = sl_enqueue_raw(ctx, k_scatter, "route_scatter", nn, 0);
+        if (st == SLUICE_OK)
+            st = set_args(ctx, k_finish, "route_finish", 4,
+                          SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof bucket_count, sizeof slots),
+                          VALUES(&fill->mem, &overflow->mem, &bucket_count, &slots));
+        if (st == SLUICE_OK)
+            st = sl_enqueue_raw(ctx, k_finish, "route_finish", bucket_count, 0);
+    }
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(out, total);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(fill, bucket_count);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(overflow, bucket_count);
+    if (k_scatter)
+        clReleaseKernel(k_scatter);
+    if (k_finish)
+        clReleaseKernel(k_finish);
+    return st;
+}
