@@ -26,7 +26,7 @@ typedef struct result {
     double seconds;       /* best time */
     double c_seconds;     /* plain C single-thread, 0 if none */
     const char *c_name;   /* what the C peer is */
-    double scratch_bytes; /* 0 if not reported */
+    double scratch_bytes; /* -1 if not measured */
 } result;
 
 static double now(void)
@@ -412,14 +412,14 @@ int main(int argc, char **argv)
                          best_of(NULL, run_scan, &b, reps),
                          best_of_c(NULL, c_scan, &b, reps),
                          "serial loop",
-                         0};
+                         -1};
     res[nr++] = (result){"reduce_u32_sum",
                          (double)n,
                          4.0 * (double)n,
                          best_of(NULL, run_reduce, &b, reps),
                          best_of_c(NULL, c_reduce, &b, reps),
                          "serial loop",
-                         0};
+                         -1};
     TRY(sluice_stream_upload(b.s_in, b.f, n));
     for (int m = 0; m < 2; ++m) {
         b.mode = m ? SLUICE_UNORDERED : SLUICE_ORDERED;
@@ -461,13 +461,13 @@ int main(int argc, char **argv)
                          t_radix,
                          t_cradix,
                          "single-thread LSD radix sort",
-                         0};
+                         -1};
     int i_radix = nr - 1;
     double t_bitonic = 0;
     if (!skip_bitonic) {
         t_bitonic = best_of(prep_sort, run_bitonic, &b, 1);
         res[nr++] = (result){"sort_bitonic_kv", (double)n, 16.0 * (double)n, t_bitonic, t_qsort,
-                             "qsort",           0};
+                             "qsort",           -1};
     }
     /* Cell index of n sorted keys into n/16 cells. */
     for (size_t i = 0; i < n; ++i)
@@ -479,14 +479,14 @@ int main(int argc, char **argv)
                          best_of(NULL, run_cell_search, &b, reps),
                          best_of_c(NULL, c_cell_count, &b, reps),
                          "serial counting",
-                         0};
+                         -1};
     res[nr++] = (result){"cell_index_count",
                          (double)n,
                          4.0 * (double)n + 4.0 * b.cells,
                          best_of(NULL, run_cell_count, &b, reps),
                          best_of_c(NULL, c_cell_count, &b, reps),
                          "serial counting",
-                         0};
+                         -1};
     /* Bounded routing of n payloads into n/16 buckets of 8 slots. */
     for (size_t i = 0; i < n; ++i)
         b.tmp_v[i] = b.keys[i] % b.cells;
@@ -500,7 +500,7 @@ int main(int argc, char **argv)
                          best_of(NULL, run_route, &b, reps),
                          best_of_c(NULL, c_route, &b, reps),
                          "serial loop",
-                         0};
+                         -1};
     /* Launch overhead: 100 dependent launches over 1024 records. */
     TRY(sluice_stream_create(ctx, 4, 1024, &b.chain_a));
     TRY(sluice_stream_create(ctx, 4, 1024, &b.chain_b));
@@ -528,17 +528,20 @@ int main(int argc, char **argv)
         const result *r = &res[i];
         double gbs = r->bytes / r->seconds / 1e9;
         double scratch_pct = r->scratch_bytes / (4.0 * (double)n) * 100.0;
-        printf("%-22s %12.1f %10.2f %8.0f%% %9.2fx %11.3f%%\n", r->name,
-               r->records / r->seconds / 1e6, gbs, 100.0 * gbs / copy_gbs,
-               r->c_seconds / r->seconds, scratch_pct);
+        char scratch[32] = "-";
+        if (r->scratch_bytes >= 0)
+            snprintf(scratch, sizeof scratch, "%.3f%%", scratch_pct);
+        printf("%-22s %12.1f %10.2f %8.0f%% %9.2fx %12s\n", r->name, r->records / r->seconds / 1e6,
+               gbs, 100.0 * gbs / copy_gbs, r->c_seconds / r->seconds, scratch);
+        char scratch_json[64] = "null";
+        if (r->scratch_bytes >= 0)
+            snprintf(scratch_json, sizeof scratch_json, "%.0f", r->scratch_bytes);
         fprintf(f,
                 "    {\"name\": \"%s\", \"seconds\": %.6f, \"records_per_s\": %.1f, "
                 "\"gb_per_s\": %.3f, \"fraction_of_copy\": %.3f, \"c_peer\": \"%s\", "
-                "\"c_seconds\": %.6f, \"speedup_vs_c\": %.3f, \"scratch_bytes\": %.0f, "
-                "\"scratch_fraction_of_payload\": %.5f}%s\n",
+                "\"c_seconds\": %.6f, \"speedup_vs_c\": %.3f, \"scratch_bytes\": %s}%s\n",
                 r->name, r->seconds, r->records / r->seconds, gbs, gbs / copy_gbs, r->c_name,
-                r->c_seconds, r->c_seconds / r->seconds, r->scratch_bytes,
-                r->scratch_bytes / (4.0 * (double)n), i + 1 < nr ? "," : "");
+                r->c_seconds, r->c_seconds / r->seconds, scratch_json, i + 1 < nr ? "," : "");
     }
     double per_launch_us = t_chain / 100.0 * 1e6;
     printf(

@@ -4,7 +4,7 @@
  * binary search per cell (sluice_cell_index_search); counting the keys of
  * each cell and scanning the counts gives the same index without needing
  * sorted keys (sluice_cell_index_count). Kernels: kernels/cell_index.cl. */
-#include "internal.h"
+#include "common.h"
 #include "sluice/streams.h"
 
 /* Scan blocks per compute unit: a few per core so uneven blocks even out. */
@@ -12,52 +12,14 @@
 /* Smallest block worth a work-item of its own. */
 #define SCAN_MIN_BLOCK 4096u
 
-static sluice_status check_stream(sluice_context *ctx, sluice_stream *s, const char *fn,
-                                  const char *what)
-{
-    if (!s || s->ctx != ctx)
-        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "%s: %s is NULL or belongs to another context", fn, what);
-    if (s->record_size != 4)
-        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "%s: %s has records of %zu bytes; uint32 records (4 bytes) are needed", fn,
-                       what, s->record_size);
-    return SLUICE_OK;
-}
-
-static sluice_status set_args(sluice_context *ctx, cl_kernel k, const char *name, unsigned count,
-                              const size_t *sizes, const void *const *values)
-{
-    for (unsigned i = 0; i < count; ++i) {
-        cl_int err = clSetKernelArg(k, i, sizes[i], values[i]);
-        if (err != CL_SUCCESS) {
-            char what[96];
-            snprintf(what, sizeof what, "setting argument %u of %s", i, name);
-            return sl_cl_fail(ctx, err, what);
-        }
-    }
-    return SLUICE_OK;
-}
-
-#define SIZES(...)                                                                                 \
-    (const size_t[])                                                                               \
-    {                                                                                              \
-        __VA_ARGS__                                                                                \
-    }
-#define VALUES(...)                                                                                \
-    (const void *const[])                                                                          \
-    {                                                                                              \
-        __VA_ARGS__                                                                                \
-    }
-
 /* Common checks: keys and start are uint32 streams, start can hold
  * cell_count + 1 records. Returns the number of keys in *n. */
 static sluice_status prepare(sluice_context *ctx, const char *fn, sluice_stream *keys,
                              uint32_t cell_count, sluice_stream *start, size_t *n)
 {
-    sluice_status st = check_stream(ctx, keys, fn, "keys");
+    sluice_status st = sl_check_u32_stream(ctx, keys, fn, "keys", NULL);
     if (st == SLUICE_OK)
-        st = check_stream(ctx, start, fn, "start");
+        st = sl_check_u32_stream(ctx, start, fn, "start", NULL);
     if (st != SLUICE_OK)
         return st;
     if (keys == start)
@@ -86,9 +48,9 @@ sluice_status sluice_cell_index_search(sluice_context *ctx, sluice_stream *sorte
     cl_uint nn = (cl_uint)n, cells = cell_count + 1u;
     st = sl_embedded_cl_kernel(ctx, "cell_index.cl", "cell_search", &k);
     if (st == SLUICE_OK)
-        st = set_args(ctx, k, "cell_search", 4,
-                      SIZES(sizeof(cl_mem), sizeof nn, sizeof cells, sizeof(cl_mem)),
-                      VALUES(&sorted_keys->mem, &nn, &cells, &start->mem));
+        st = sl_set_args(ctx, k, "cell_search", 4,
+                         SIZES(sizeof(cl_mem), sizeof nn, sizeof cells, sizeof(cl_mem)),
+                         VALUES(&sorted_keys->mem, &nn, &cells, &start->mem));
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, k, "cell_search", cells, 0);
     if (k)
@@ -139,26 +101,26 @@ sluice_status sluice_cell_index_count(sluice_context *ctx, sluice_stream *keys, 
     if (st == SLUICE_OK)
         st = sl_embedded_cl_kernel(ctx, "cell_index.cl", "cell_scan_apply", &k_apply);
     if (st == SLUICE_OK)
-        st = set_args(ctx, k_hist, "cell_hist", 4,
-                      SIZES(sizeof(cl_mem), sizeof nn, sizeof cells, sizeof(cl_mem)),
-                      VALUES(&keys->mem, &nn, &cells, &start->mem));
+        st = sl_set_args(ctx, k_hist, "cell_hist", 4,
+                         SIZES(sizeof(cl_mem), sizeof nn, sizeof cells, sizeof(cl_mem)),
+                         VALUES(&keys->mem, &nn, &cells, &start->mem));
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, k_hist, "cell_hist", nn, 0);
     if (st == SLUICE_OK)
-        st = set_args(ctx, k_sums, "cell_scan_sums", 4,
-                      SIZES(sizeof(cl_mem), sizeof len, sizeof blocks, sizeof(cl_mem)),
-                      VALUES(&start->mem, &len, &blocks, &sums));
+        st = sl_set_args(ctx, k_sums, "cell_scan_sums", 4,
+                         SIZES(sizeof(cl_mem), sizeof len, sizeof blocks, sizeof(cl_mem)),
+                         VALUES(&start->mem, &len, &blocks, &sums));
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, k_sums, "cell_scan_sums", blocks, 1);
     if (st == SLUICE_OK)
-        st = set_args(ctx, k_offsets, "cell_scan_offsets", 2, SIZES(sizeof(cl_mem), sizeof blocks),
-                      VALUES(&sums, &blocks));
+        st = sl_set_args(ctx, k_offsets, "cell_scan_offsets", 2,
+                         SIZES(sizeof(cl_mem), sizeof blocks), VALUES(&sums, &blocks));
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, k_offsets, "cell_scan_offsets", 1, 1);
     if (st == SLUICE_OK)
-        st = set_args(ctx, k_apply, "cell_scan_apply", 4,
-                      SIZES(sizeof(cl_mem), sizeof len, sizeof blocks, sizeof(cl_mem)),
-                      VALUES(&start->mem, &len, &blocks, &sums));
+        st = sl_set_args(ctx, k_apply, "cell_scan_apply", 4,
+                         SIZES(sizeof(cl_mem), sizeof len, sizeof blocks, sizeof(cl_mem)),
+                         VALUES(&start->mem, &len, &blocks, &sums));
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, k_apply, "cell_scan_apply", blocks, 1);
     if (st == SLUICE_OK)

@@ -1,7 +1,7 @@
 /* Reductions of scalar streams (kernels/reduce.cl): one work-item per
  * contiguous chunk reduces its records in a plain loop, then one work-item
  * reduces the per-chunk results; the host reads the single value back. */
-#include "internal.h"
+#include "common.h"
 #include "sluice/streams.h"
 
 #include <math.h>
@@ -20,13 +20,6 @@ static size_t reduce_chunk(size_t bound)
     while (c * c < bound)
         c *= 2;
     return c;
-}
-
-/* Sets argument `i` of `k` and keeps the first error in `*err`. */
-static void set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *err)
-{
-    if (*err == CL_SUCCESS)
-        *err = clSetKernelArg(k, i, size, value);
 }
 
 /* Writes the identity of `op` for `type` to `result`. */
@@ -99,15 +92,15 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
     }
     if (st == SLUICE_OK) {
         cl_uint c = (cl_uint)chunk, m = (cl_uint)global;
-        set_arg(part, 0, sizeof(cl_mem), &ctx->vars, &err);
-        set_arg(part, 1, sizeof(cl_uint), &in_var, &err);
-        set_arg(part, 2, sizeof(cl_uint), &n_fixed, &err);
-        set_arg(part, 3, sizeof(cl_uint), &limit, &err);
-        set_arg(part, 4, sizeof(cl_uint), &c, &err);
-        set_arg(part, 5, sizeof(cl_mem), &in->mem, &err);
-        set_arg(part, 6, sizeof(cl_mem), &parts, &err);
-        set_arg(final, 0, sizeof(cl_mem), &parts, &err);
-        set_arg(final, 1, sizeof(cl_uint), &m, &err);
+        sl_set_arg(part, 0, sizeof(cl_mem), &ctx->vars, &err);
+        sl_set_arg(part, 1, sizeof(cl_uint), &in_var, &err);
+        sl_set_arg(part, 2, sizeof(cl_uint), &n_fixed, &err);
+        sl_set_arg(part, 3, sizeof(cl_uint), &limit, &err);
+        sl_set_arg(part, 4, sizeof(cl_uint), &c, &err);
+        sl_set_arg(part, 5, sizeof(cl_mem), &in->mem, &err);
+        sl_set_arg(part, 6, sizeof(cl_mem), &parts, &err);
+        sl_set_arg(final, 0, sizeof(cl_mem), &parts, &err);
+        sl_set_arg(final, 1, sizeof(cl_uint), &m, &err);
         if (err != CL_SUCCESS)
             st = sl_cl_fail(ctx, err, "sluice_reduce: setting kernel arguments");
     }

@@ -4,46 +4,8 @@
  * stencil buffer; per-bucket atomic counters do the stencil's job here
  * (kernels/route.cl). Which records of an overfull bucket survive depends on
  * the order in which the work-items reach the counter. */
-#include "internal.h"
+#include "common.h"
 #include "sluice/streams.h"
-
-static sluice_status check_stream(sluice_context *ctx, sluice_stream *s, const char *what)
-{
-    if (!s || s->ctx != ctx)
-        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "sluice_route_bounded: %s is NULL or belongs to another context", what);
-    if (s->record_size != 4)
-        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "sluice_route_bounded: %s has records of %zu bytes; uint32 records (4 "
-                       "bytes) are needed",
-                       what, s->record_size);
-    return SLUICE_OK;
-}
-
-static sluice_status set_args(sluice_context *ctx, cl_kernel k, const char *name, unsigned count,
-                              const size_t *sizes, const void *const *values)
-{
-    for (unsigned i = 0; i < count; ++i) {
-        cl_int err = clSetKernelArg(k, i, sizes[i], values[i]);
-        if (err != CL_SUCCESS) {
-            char what[96];
-            snprintf(what, sizeof what, "setting argument %u of %s", i, name);
-            return sl_cl_fail(ctx, err, what);
-        }
-    }
-    return SLUICE_OK;
-}
-
-#define SIZES(...)                                                                                 \
-    (const size_t[])                                                                               \
-    {                                                                                              \
-        __VA_ARGS__                                                                                \
-    }
-#define VALUES(...)                                                                                \
-    (const void *const[])                                                                          \
-    {                                                                                              \
-        __VA_ARGS__                                                                                \
-    }
 
 sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, sluice_stream *values,
                                    uint32_t bucket_count, uint32_t slots, sluice_stream *out,
@@ -51,15 +13,15 @@ sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, slu
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
-    sluice_status st = check_stream(ctx, keys, "keys");
+    sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_route_bounded", "keys", NULL);
     if (st == SLUICE_OK)
-        st = check_stream(ctx, values, "values");
+        st = sl_check_u32_stream(ctx, values, "sluice_route_bounded", "values", NULL);
     if (st == SLUICE_OK)
-        st = check_stream(ctx, out, "out");
+        st = sl_check_u32_stream(ctx, out, "sluice_route_bounded", "out", NULL);
     if (st == SLUICE_OK)
-        st = check_stream(ctx, fill, "fill");
+        st = sl_check_u32_stream(ctx, fill, "sluice_route_bounded", "fill", NULL);
     if (st == SLUICE_OK)
-        st = check_stream(ctx, overflow, "overflow");
+        st = sl_check_u32_stream(ctx, overflow, "sluice_route_bounded", "overflow", NULL);
     if (st != SLUICE_OK)
         return st;
     /* The outputs are written while the inputs are read: no sharing. */
@@ -109,17 +71,18 @@ sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, slu
         if (st == SLUICE_OK)
             st = sl_embedded_cl_kernel(ctx, "route.cl", "route_finish", &k_finish);
         if (st == SLUICE_OK)
-            st = set_args(ctx, k_scatter, "route_scatter", 7,
-                          SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof nn, sizeof bucket_count,
-                                sizeof slots, sizeof(cl_mem), sizeof(cl_mem)),
-                          VALUES(&keys->mem, &values->mem, &nn, &bucket_count, &slots, &fill->mem,
-                                 &out->mem));
+            st = sl_set_args(ctx, k_scatter, "route_scatter", 7,
+                             SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof nn, sizeof bucket_count,
+                                   sizeof slots, sizeof(cl_mem), sizeof(cl_mem)),
+                             VALUES(&keys->mem, &values->mem, &nn, &bucket_count, &slots,
+                                    &fill->mem, &out->mem));
         if (st == SLUICE_OK)
             st = sl_enqueue_raw(ctx, k_scatter, "route_scatter", nn, 0);
         if (st == SLUICE_OK)
-            st = set_args(ctx, k_finish, "route_finish", 4,
-                          SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof bucket_count, sizeof slots),
-                          VALUES(&fill->mem, &overflow->mem, &bucket_count, &slots));
+            st = sl_set_args(
+                ctx, k_finish, "route_finish", 4,
+                SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof bucket_count, sizeof slots),
+                VALUES(&fill->mem, &overflow->mem, &bucket_count, &slots));
         if (st == SLUICE_OK)
             st = sl_enqueue_raw(ctx, k_finish, "route_finish", bucket_count, 0);
     }

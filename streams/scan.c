@@ -2,7 +2,7 @@
  * (kernels/scan.cl). Each work-item owns one chunk of records and walks it in
  * a plain loop, which is what runs fast on a CPU device; the chunk sums are
  * scanned by a single work-item in between. */
-#include "internal.h"
+#include "common.h"
 #include "sluice/streams.h"
 
 #include <string.h>
@@ -20,13 +20,6 @@ static size_t scan_chunk(size_t bound)
     while (c * c < bound)
         c *= 2;
     return c;
-}
-
-/* Sets argument `i` of `k` and accumulates the first error in `*err`. */
-static void set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *err)
-{
-    if (*err == CL_SUCCESS)
-        *err = clSetKernelArg(k, i, size, value);
 }
 
 /* Everything one scan or reduce call needs about its input: the length (known
@@ -120,31 +113,31 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
         cl_uint chunk = (cl_uint)si.chunk, m = (cl_uint)si.global, incl = inclusive ? 1u : 0u;
         cl_uint out_var = out->var;
         /* Pass 1. */
-        set_arg(k[0], 0, sizeof(cl_mem), &ctx->vars, &err);
-        set_arg(k[0], 1, sizeof(cl_uint), &si.in_var, &err);
-        set_arg(k[0], 2, sizeof(cl_uint), &si.n_fixed, &err);
-        set_arg(k[0], 3, sizeof(cl_uint), &si.limit, &err);
-        set_arg(k[0], 4, sizeof(cl_uint), &chunk, &err);
-        set_arg(k[0], 5, sizeof(cl_mem), &in->mem, &err);
-        set_arg(k[0], 6, sizeof(cl_mem), &sums, &err);
+        sl_set_arg(k[0], 0, sizeof(cl_mem), &ctx->vars, &err);
+        sl_set_arg(k[0], 1, sizeof(cl_uint), &si.in_var, &err);
+        sl_set_arg(k[0], 2, sizeof(cl_uint), &si.n_fixed, &err);
+        sl_set_arg(k[0], 3, sizeof(cl_uint), &si.limit, &err);
+        sl_set_arg(k[0], 4, sizeof(cl_uint), &chunk, &err);
+        sl_set_arg(k[0], 5, sizeof(cl_mem), &in->mem, &err);
+        sl_set_arg(k[0], 6, sizeof(cl_mem), &sums, &err);
         /* Pass 2. */
-        set_arg(k[1], 0, sizeof(cl_mem), &ctx->vars, &err);
-        set_arg(k[1], 1, sizeof(cl_uint), &si.in_var, &err);
-        set_arg(k[1], 2, sizeof(cl_uint), &si.n_fixed, &err);
-        set_arg(k[1], 3, sizeof(cl_uint), &si.limit, &err);
-        set_arg(k[1], 4, sizeof(cl_uint), &out_var, &err);
-        set_arg(k[1], 5, sizeof(cl_mem), &sums, &err);
-        set_arg(k[1], 6, sizeof(cl_uint), &m, &err);
+        sl_set_arg(k[1], 0, sizeof(cl_mem), &ctx->vars, &err);
+        sl_set_arg(k[1], 1, sizeof(cl_uint), &si.in_var, &err);
+        sl_set_arg(k[1], 2, sizeof(cl_uint), &si.n_fixed, &err);
+        sl_set_arg(k[1], 3, sizeof(cl_uint), &si.limit, &err);
+        sl_set_arg(k[1], 4, sizeof(cl_uint), &out_var, &err);
+        sl_set_arg(k[1], 5, sizeof(cl_mem), &sums, &err);
+        sl_set_arg(k[1], 6, sizeof(cl_uint), &m, &err);
         /* Pass 3. */
-        set_arg(k[2], 0, sizeof(cl_mem), &ctx->vars, &err);
-        set_arg(k[2], 1, sizeof(cl_uint), &si.in_var, &err);
-        set_arg(k[2], 2, sizeof(cl_uint), &si.n_fixed, &err);
-        set_arg(k[2], 3, sizeof(cl_uint), &si.limit, &err);
-        set_arg(k[2], 4, sizeof(cl_uint), &chunk, &err);
-        set_arg(k[2], 5, sizeof(cl_mem), &in->mem, &err);
-        set_arg(k[2], 6, sizeof(cl_mem), &out->mem, &err);
-        set_arg(k[2], 7, sizeof(cl_mem), &sums, &err);
-        set_arg(k[2], 8, sizeof(cl_uint), &incl, &err);
+        sl_set_arg(k[2], 0, sizeof(cl_mem), &ctx->vars, &err);
+        sl_set_arg(k[2], 1, sizeof(cl_uint), &si.in_var, &err);
+        sl_set_arg(k[2], 2, sizeof(cl_uint), &si.n_fixed, &err);
+        sl_set_arg(k[2], 3, sizeof(cl_uint), &si.limit, &err);
+        sl_set_arg(k[2], 4, sizeof(cl_uint), &chunk, &err);
+        sl_set_arg(k[2], 5, sizeof(cl_mem), &in->mem, &err);
+        sl_set_arg(k[2], 6, sizeof(cl_mem), &out->mem, &err);
+        sl_set_arg(k[2], 7, sizeof(cl_mem), &sums, &err);
+        sl_set_arg(k[2], 8, sizeof(cl_uint), &incl, &err);
         if (err != CL_SUCCESS)
             st = sl_cl_fail(ctx, err, "sluice_scan: setting kernel arguments");
     }

@@ -4,56 +4,13 @@
  * the first merges of every block, and the last steps of every later merge,
  * run in local memory: log2(2W) * (log2(2W) + 1) / 2 steps in one launch, and
  * one launch per remaining merge instead of one per step. */
-#include "internal.h"
+#include "common.h"
 #include "sluice/streams.h"
 
 #include <string.h>
 
 /* Largest work-group used for the local-memory stages (2x as many keys). */
 #define BITONIC_MAX_LOCAL 256u
-
-static sluice_status check_stream(sluice_context *ctx, sluice_stream *s, const char *what,
-                                  size_t *n)
-{
-    if (!s || s->ctx != ctx)
-        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "sluice_sort_bitonic: %s is NULL or belongs to another context", what);
-    if (s->record_size != 4)
-        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "sluice_sort_bitonic: %s has records of %zu bytes; uint32 records (4 "
-                       "bytes) are needed",
-                       what, s->record_size);
-    sluice_status st = sluice_stream_length(s, n);
-    if (st == SLUICE_OK && *n > s->capacity)
-        *n = s->capacity; /* an overflowed output: only the stored records */
-    return st;
-}
-
-static sluice_status set_args(sluice_context *ctx, cl_kernel k, const char *name, unsigned count,
-                              const size_t *sizes, const void *const *values)
-{
-    for (unsigned i = 0; i < count; ++i) {
-        cl_int err = clSetKernelArg(k, i, sizes[i], values[i]);
-        if (err != CL_SUCCESS) {
-            char what[96];
-            snprintf(what, sizeof what, "setting argument %u of %s", i, name);
-            return sl_cl_fail(ctx, err, what);
-        }
-    }
-    return SLUICE_OK;
-}
-
-/* Argument lists for set_args: sizes, then pointers to the values. */
-#define SIZES(...)                                                                                 \
-    (const size_t[])                                                                               \
-    {                                                                                              \
-        __VA_ARGS__                                                                                \
-    }
-#define VALUES(...)                                                                                \
-    (const void *const[])                                                                          \
-    {                                                                                              \
-        __VA_ARGS__                                                                                \
-    }
 
 /* Queues bitonic_local over the blocks of 2w positions that hold records. */
 static sluice_status run_local(sluice_context *ctx, cl_kernel k, cl_uint n, cl_uint w, cl_uint k_lo,
@@ -73,14 +30,14 @@ sluice_status sluice_sort_bitonic(sluice_context *ctx, sluice_stream *keys, slui
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     size_t n = 0, nv = 0;
-    sluice_status st = check_stream(ctx, keys, "keys", &n);
+    sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_sort_bitonic", "keys", &n);
     if (st != SLUICE_OK)
         return st;
     if (values) {
         if (values == keys)
             return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                            "sluice_sort_bitonic: keys and values are the same stream");
-        st = check_stream(ctx, values, "values", &nv);
+        st = sl_check_u32_stream(ctx, values, "sluice_sort_bitonic", "values", &nv);
         if (st != SLUICE_OK)
             return st;
         if (nv < n)
@@ -116,13 +73,13 @@ sluice_status sluice_sort_bitonic(sluice_context *ctx, sluice_stream *keys, slui
 
     cl_uint has_vals = values ? 1u : 0u;
     cl_mem vmem = values ? values->mem : keys->mem; /* never touched without values */
-    st = set_args(ctx, k_step, "bitonic_step", 4,
-                  SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof has_vals, sizeof nn),
-                  VALUES(&keys->mem, &vmem, &has_vals, &nn));
+    st = sl_set_args(ctx, k_step, "bitonic_step", 4,
+                     SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof has_vals, sizeof nn),
+                     VALUES(&keys->mem, &vmem, &has_vals, &nn));
     if (st == SLUICE_OK)
-        st = set_args(ctx, k_local, "bitonic_local", 4,
-                      SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof has_vals, sizeof nn),
-                      VALUES(&keys->mem, &vmem, &has_vals, &nn));
+        st = sl_set_args(ctx, k_local, "bitonic_local", 4,
+                         SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof has_vals, sizeof nn),
+                         VALUES(&keys->mem, &vmem, &has_vals, &nn));
     if (st == SLUICE_OK) {
         cl_int err = clSetKernelArg(k_local, 6, 2u * w * sizeof(cl_uint), NULL);
         if (err == CL_SUCCESS)

@@ -8,7 +8,7 @@
  * serial, stable scatter per chunk with only a small table scan between. The
  * first launch counts all four digits at once; passes in which every key has
  * the same digit would only copy, so they are skipped. */
-#include "internal.h"
+#include "common.h"
 #include "sluice/streams.h"
 
 #include <stdlib.h>
@@ -23,62 +23,19 @@
 /* Records below which a chunk is not worth its histogram table. */
 #define MIN_CHUNK 16384u
 
-/* Checks a uint32 stream argument and returns its length in *n. */
-static sluice_status check_stream(sluice_context *ctx, sluice_stream *s, const char *fn,
-                                  const char *what, size_t *n)
-{
-    if (!s || s->ctx != ctx)
-        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "%s: %s is NULL or belongs to another context", fn, what);
-    if (s->record_size != 4)
-        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "%s: %s has records of %zu bytes; uint32 records (4 bytes) are needed", fn,
-                       what, s->record_size);
-    sluice_status st = sluice_stream_length(s, n);
-    if (st == SLUICE_OK && *n > s->capacity)
-        *n = s->capacity; /* an overflowed output: only the stored records */
-    return st;
-}
-
-static sluice_status set_args(sluice_context *ctx, cl_kernel k, const char *name, unsigned count,
-                              const size_t *sizes, const void *const *values)
-{
-    for (unsigned i = 0; i < count; ++i) {
-        cl_int err = clSetKernelArg(k, i, sizes[i], values[i]);
-        if (err != CL_SUCCESS) {
-            char what[96];
-            snprintf(what, sizeof what, "setting argument %u of %s", i, name);
-            return sl_cl_fail(ctx, err, what);
-        }
-    }
-    return SLUICE_OK;
-}
-
-/* Argument lists for set_args: sizes, then pointers to the values. */
-#define SIZES(...)                                                                                 \
-    (const size_t[])                                                                               \
-    {                                                                                              \
-        __VA_ARGS__                                                                                \
-    }
-#define VALUES(...)                                                                                \
-    (const void *const[])                                                                          \
-    {                                                                                              \
-        __VA_ARGS__                                                                                \
-    }
-
 sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice_stream *values)
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     size_t n = 0, nv = 0;
-    sluice_status st = check_stream(ctx, keys, "sluice_sort_radix", "keys", &n);
+    sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_sort_radix", "keys", &n);
     if (st != SLUICE_OK)
         return st;
     if (values) {
         if (values == keys)
             return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                            "sluice_sort_radix: keys and values are the same stream");
-        st = check_stream(ctx, values, "sluice_sort_radix", "values", &nv);
+        st = sl_check_u32_stream(ctx, values, "sluice_sort_radix", "values", &nv);
         if (st != SLUICE_OK)
             return st;
         if (nv < n)
@@ -132,9 +89,9 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
 
     /* All four histograms in one read; the host needs their totals to skip
      * passes, so this is the one point where the sort waits. */
-    st = set_args(ctx, k_all, "radix_hist_all", 4,
-                  SIZES(sizeof(cl_mem), sizeof nn, sizeof chunks, sizeof(cl_mem)),
-                  VALUES(&keys->mem, &nn, &chunks, &table));
+    st = sl_set_args(ctx, k_all, "radix_hist_all", 4,
+                     SIZES(sizeof(cl_mem), sizeof nn, sizeof chunks, sizeof(cl_mem)),
+                     VALUES(&keys->mem, &nn, &chunks, &table));
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, k_all, "radix_hist_all", chunks, 1);
     if (st != SLUICE_OK)
@@ -164,31 +121,31 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
             continue;
         cl_uint shift = 8u * p, offset = p * table_len;
         if (!first) {
-            st = set_args(ctx, k_hist, "radix_hist", 6,
-                          SIZES(sizeof(cl_mem), sizeof nn, sizeof chunks, sizeof shift,
-                                sizeof(cl_mem), sizeof offset),
-                          VALUES(&cur_k, &nn, &chunks, &shift, &table, &offset));
+            st = sl_set_args(ctx, k_hist, "radix_hist", 6,
+                             SIZES(sizeof(cl_mem), sizeof nn, sizeof chunks, sizeof shift,
+                                   sizeof(cl_mem), sizeof offset),
+                             VALUES(&cur_k, &nn, &chunks, &shift, &table, &offset));
             if (st == SLUICE_OK)
                 st = sl_enqueue_raw(ctx, k_hist, "radix_hist", chunks, 1);
         }
         first = 0;
         if (st == SLUICE_OK)
-            st = set_args(ctx, k_scan, "radix_scan", 3,
-                          SIZES(sizeof(cl_mem), sizeof offset, sizeof table_len),
-                          VALUES(&table, &offset, &table_len));
+            st = sl_set_args(ctx, k_scan, "radix_scan", 3,
+                             SIZES(sizeof(cl_mem), sizeof offset, sizeof table_len),
+                             VALUES(&table, &offset, &table_len));
         if (st == SLUICE_OK)
             st = sl_enqueue_raw(ctx, k_scan, "radix_scan", 1, 1);
         if (st == SLUICE_OK && values)
-            st = set_args(
+            st = sl_set_args(
                 ctx, k_scatter, "radix_scatter_pairs", 9,
                 SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem), sizeof nn,
                       sizeof chunks, sizeof shift, sizeof(cl_mem), sizeof offset),
                 VALUES(&cur_k, &cur_v, &alt_k, &alt_v, &nn, &chunks, &shift, &table, &offset));
         else if (st == SLUICE_OK)
-            st = set_args(ctx, k_scatter, "radix_scatter_keys", 7,
-                          SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof nn, sizeof chunks,
-                                sizeof shift, sizeof(cl_mem), sizeof offset),
-                          VALUES(&cur_k, &alt_k, &nn, &chunks, &shift, &table, &offset));
+            st = sl_set_args(ctx, k_scatter, "radix_scatter_keys", 7,
+                             SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof nn, sizeof chunks,
+                                   sizeof shift, sizeof(cl_mem), sizeof offset),
+                             VALUES(&cur_k, &alt_k, &nn, &chunks, &shift, &table, &offset));
         if (st == SLUICE_OK)
             st = sl_enqueue_raw(ctx, k_scatter,
                                 values ? "radix_scatter_pairs" : "radix_scatter_keys", chunks, 1);

@@ -1,0 +1,42 @@
+/* Helpers shared by the stream algorithms (see common.h). */
+#include "common.h"
+
+#include <stdio.h>
+
+sluice_status sl_check_u32_stream(sluice_context *ctx, sluice_stream *s, const char *fn,
+                                  const char *what, size_t *n)
+{
+    if (!s || s->ctx != ctx)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "%s: %s is NULL or belongs to another context", fn, what);
+    if (s->record_size != 4)
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
+                       "%s: %s has records of %zu bytes; uint32 records (4 bytes) are needed", fn,
+                       what, s->record_size);
+    if (!n)
+        return SLUICE_OK;
+    sluice_status st = sluice_stream_length(s, n);
+    if (st == SLUICE_OK && *n > s->capacity)
+        *n = s->capacity; /* an overflowed output: only the stored records */
+    return st;
+}
+
+sluice_status sl_set_args(sluice_context *ctx, cl_kernel k, const char *name, unsigned count,
+                          const size_t *sizes, const void *const *values)
+{
+    for (unsigned i = 0; i < count; ++i) {
+        cl_int err = clSetKernelArg(k, i, sizes[i], values[i]);
+        if (err != CL_SUCCESS) {
+            char what[96];
+            snprintf(what, sizeof what, "setting argument %u of %s", i, name);
+            return sl_cl_fail(ctx, err, what);
+        }
+    }
+    return SLUICE_OK;
+}
+
+void sl_set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *err)
+{
+    if (*err == CL_SUCCESS)
+        *err = clSetKernelArg(k, i, size, value);
+}
