@@ -14,8 +14,7 @@
     __kernel void compact_##SUFFIX(SLUICE_PARAMS, global const T *in, global const uint *flags,    \
                                    global T *out)                                                  \
     {                                                                                              \
-        SLUICE_FOR_EACH(i)                                                                         \
-        {                                                                                          \
+        SLUICE_FOR_EACH (i) {                                                                      \
             SLUICE_EMIT_IF(0, out, in[i], flags[i] != 0u);                                         \
         }                                                                                          \
     }
@@ -27,8 +26,7 @@ COMPACT_KERNEL(uint4, w4)
 __kernel void compact_words(SLUICE_PARAMS, global const uint *in, global const uint *flags,
                             global uint *out, uint words)
 {
-    SLUICE_FOR_EACH(i)
-    {
+    SLUICE_FOR_EACH (i) {
         uint keep = flags[i] != 0u;
         uint at = SLUICE_EMIT_INDEX(0, keep);
         if (SLUICE_WRITING && keep) {
@@ -66,8 +64,7 @@ __kernel void compact_words(SLUICE_PARAMS, global const uint *in, global const u
                                  global T *o3, global T *o4, global T *o5, global T *o6,           \
                                  global T *o7)                                                     \
     {                                                                                              \
-        SLUICE_FOR_EACH(i)                                                                         \
-        {                                                                                          \
+        SLUICE_FOR_EACH (i) {                                                                      \
             uint b = buckets[i];                                                                   \
             b = b < count ? b : SLUICE_NONE;                                                       \
             SPLIT_SLOTS_(SPLIT_MOVE_W_);                                                           \
@@ -91,8 +88,7 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
                           global uint *o3, global uint *o4, global uint *o5, global uint *o6,
                           global uint *o7, uint words)
 {
-    SLUICE_FOR_EACH(i)
-    {
+    SLUICE_FOR_EACH (i) {
         uint b = buckets[i];
         b = b < count ? b : SLUICE_NONE;
         SPLIT_SLOTS_(SPLIT_MOVE_WORDS_);
@@ -105,8 +101,7 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
 __kernel void partition_u32(SLUICE_PARAMS, global const uint *in, uint t, global uint *below,
                             global uint *above)
 {
-    SLUICE_FOR_EACH(i)
-    {
+    SLUICE_FOR_EACH (i) {
         uint x = in[i];
         uint lo = x < t;
         SLUICE_EMIT_IF(0, below, x, lo);
@@ -117,8 +112,7 @@ __kernel void partition_u32(SLUICE_PARAMS, global const uint *in, uint t, global
 __kernel void partition_f32(SLUICE_PARAMS, global const uint *in, float t, global uint *below,
                             global uint *above)
 {
-    SLUICE_FOR_EACH(i)
-    {
+    SLUICE_FOR_EACH (i) {
         uint x = in[i];
         uint lo = as_float(x) < t;
         SLUICE_EMIT_IF(0, below, x, lo);

@@ -51,7 +51,7 @@ inline uint step(particle *p)
     if (p->y < 0) {
         if (p->x >= HOLE_BEGIN && p->x < HOLE_END)
             return FATE_ESCAPED;
-        p->y = 0; /* back on the floor */
+        p->y = 0;               /* back on the floor */
         p->vy = -p->vy * 3 / 4; /* the floor takes a quarter of the speed */
         if (p->vy < STOP_SPEED) {
             p->vy = 0;
@@ -61,14 +61,14 @@ inline uint step(particle *p)
     return FATE_MOVING;
 }
 
-__kernel void bounce(SLUICE_PARAMS,
+__kernel void bounce(SLUICE_PARAMS,               /* hidden parameters, always first */
                      global const particle *live, /* argument 0: the input stream */
                      global particle *next,       /* argument 1: output slot 0 */
                      global particle *departed,   /* argument 2: output slot 1 */
                      int steps,                   /* argument 3 */
                      uint pass)                   /* argument 4 */
 {
-    SLUICE_FOR_EACH(i) {
+    SLUICE_FOR_EACH (i) {
         /* This body runs twice per particle (count pass, write pass): it only
          * reads the input and its arguments, so both runs emit the same. */
         particle p = live[i];

@@ -15,15 +15,15 @@
  */
 #include "sluice.cl"
 
-__kernel void split_sign(SLUICE_PARAMS,              /* hidden parameters, always first */
-                         global const float *in,     /* argument 0: the input stream */
-                         global float *negative,     /* argument 1: output slot 0 */
-                         global float *small,        /* argument 2: output slot 1 */
-                         global float *large,        /* argument 3: output slot 2 */
-                         float threshold,            /* argument 4 */
-                         float epsilon)              /* argument 5 */
+__kernel void split_sign(SLUICE_PARAMS,          /* hidden parameters, always first */
+                         global const float *in, /* argument 0: the input stream */
+                         global float *negative, /* argument 1: output slot 0 */
+                         global float *small,    /* argument 2: output slot 1 */
+                         global float *large,    /* argument 3: output slot 2 */
+                         float threshold,        /* argument 4 */
+                         float epsilon)          /* argument 5 */
 {
-    SLUICE_FOR_EACH(i) {
+    SLUICE_FOR_EACH (i) {
         float x = in[i];
 
         /* Not a number: emit nothing, count nothing more. `continue`, never
