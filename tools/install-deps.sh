@@ -3,7 +3,9 @@
 # Idempotent; uses sudo when not run as root.
 set -eu
 PKGS="build-essential pkg-config meson ninja-build cmake python3
-ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo"
+ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
+libopenimageio-dev openimageio-tools libassimp-dev libcjson-dev libflann-dev
+glmark2-data"
 missing=""
 for p in $PKGS; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
