@@ -19,7 +19,20 @@
         }                                                                                          \
     }
 
-COMPACT_KERNEL(uint, w1)
+/* 4-byte records, the common case, go 16 at a time (SLUICE_EMIT16). */
+__kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint *flags,
+                         global uint *out)
+{
+    SLUICE_FOR_EACH_RANGE(b, e)
+    {
+        uint i = b;
+        for (; i + 16u <= e; i += 16u)
+            SLUICE_EMIT16(0, out, vload16(0, in + i),
+                          sluice_mask16(as_int16(vload16(0, flags + i) != (uint16)0u)));
+        for (; i < e; ++i)
+            SLUICE_EMIT_IF(0, out, in[i], flags[i] != 0u);
+    }
+}
 COMPACT_KERNEL(uint2, w2)
 COMPACT_KERNEL(uint4, w4)
 
@@ -71,7 +84,38 @@ __kernel void compact_words(SLUICE_PARAMS, global const uint *in, global const u
         }                                                                                          \
     }
 
-SPLIT_KERNEL(uint, w1)
+/* 4-byte records go 16 at a time: one mask per bound output. */
+#define SPLIT16_SLOT_(K, OUT)                                                                      \
+    do {                                                                                           \
+        if (K##u < count)                                                                          \
+            SLUICE_EMIT16(K, OUT, x, sluice_mask16(as_int16(bv == (uint16)K##u)));                 \
+    } while (0)
+
+__kernel void split_w1(SLUICE_PARAMS, global const uint *in, global const uint *buckets, uint count,
+                       global uint *o0, global uint *o1, global uint *o2, global uint *o3,
+                       global uint *o4, global uint *o5, global uint *o6, global uint *o7)
+{
+    SLUICE_FOR_EACH_RANGE(lo, hi)
+    {
+        uint i = lo;
+        for (; i + 16u <= hi; i += 16u) {
+            uint16 x = vload16(0, in + i), bv = vload16(0, buckets + i);
+            SPLIT16_SLOT_(0, o0);
+            SPLIT16_SLOT_(1, o1);
+            SPLIT16_SLOT_(2, o2);
+            SPLIT16_SLOT_(3, o3);
+            SPLIT16_SLOT_(4, o4);
+            SPLIT16_SLOT_(5, o5);
+            SPLIT16_SLOT_(6, o6);
+            SPLIT16_SLOT_(7, o7);
+        }
+        for (; i < hi; ++i) {
+            uint b = buckets[i];
+            b = b < count ? b : SLUICE_NONE;
+            SPLIT_SLOTS_(SPLIT_MOVE_W_);
+        }
+    }
+}
 SPLIT_KERNEL(uint2, w2)
 SPLIT_KERNEL(uint4, w4)
 
@@ -97,25 +141,28 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
 
 /* Partition of scalars by a threshold: x < t goes to slot 0 (`below`), the
  * rest to slot 1 (`above`); for floats a NaN compares false and goes above.
- * Records are moved as their bit patterns. */
-__kernel void partition_u32(SLUICE_PARAMS, global const uint *in, uint t, global uint *below,
-                            global uint *above)
-{
-    SLUICE_FOR_EACH (i) {
-        uint x = in[i];
-        uint lo = x < t;
-        SLUICE_EMIT_IF(0, below, x, lo);
-        SLUICE_EMIT_IF(1, above, x, !lo);
+ * Records are moved as their bit patterns, 16 at a time. */
+#define PARTITION_KERNEL(SUFFIX, T, T16, AS1, AS16)                                                \
+    __kernel void partition_##SUFFIX(SLUICE_PARAMS, global const uint *in, T t,                    \
+                                     global uint *below, global uint *above)                       \
+    {                                                                                              \
+        SLUICE_FOR_EACH_RANGE(b, e)                                                                \
+        {                                                                                          \
+            uint i = b;                                                                            \
+            for (; i + 16u <= e; i += 16u) {                                                       \
+                uint16 x = vload16(0, in + i);                                                     \
+                ushort m = sluice_mask16(as_int16(AS16(x) < (T16)t));                              \
+                SLUICE_EMIT16(0, below, x, m);                                                     \
+                SLUICE_EMIT16(1, above, x, (ushort)~m);                                            \
+            }                                                                                      \
+            for (; i < e; ++i) {                                                                   \
+                uint x = in[i];                                                                    \
+                uint lo = AS1(x) < t;                                                              \
+                SLUICE_EMIT_IF(0, below, x, lo);                                                   \
+                SLUICE_EMIT_IF(1, above, x, !lo);                                                  \
+            }                                                                                      \
+        }                                                                                          \
     }
-}
 
-__kernel void partition_f32(SLUICE_PARAMS, global const uint *in, float t, global uint *below,
-                            global uint *above)
-{
-    SLUICE_FOR_EACH (i) {
-        uint x = in[i];
-        uint lo = as_float(x) < t;
-        SLUICE_EMIT_IF(0, below, x, lo);
-        SLUICE_EMIT_IF(1, above, x, !lo);
-    }
-}
+PARTITION_KERNEL(u32, uint, uint16, , )
+PARTITION_KERNEL(f32, float, float16, as_float, as_float16)

@@ -150,6 +150,20 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
          sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
         for (uint id = sluice_s_.begin; id < sluice_s_.end; ++id)
 
+/* The range form of SLUICE_FOR_EACH, for bodies that handle records in
+ * blocks (vector loads, SLUICE_EMIT16): the body runs once per pass with this
+ * work-item's records [b, e) in the named variables and loops over them
+ * itself. The rules above hold per record: both passes must emit the same
+ * records. The per-record macros (SLUICE_EMIT_IF, SLUICE_COUNT) work inside
+ * it too, e.g. for a tail of fewer than 16 records. */
+#define SLUICE_FOR_EACH_RANGE(b, e)                                                                \
+    sluice_state_ sluice_s_;                                                                       \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_);                          \
+    for (; sluice_s_.pass < 2u;                                                                    \
+         sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
+        for (uint b = sluice_s_.begin, e = sluice_s_.end, sluice_once_ = 1u; sluice_once_;         \
+             sluice_once_ = 0u)
+
 /* True in the pass that writes (always true for kernels without conditional
  * outputs). Guard mapped writes with it to avoid doing them twice. */
 #define SLUICE_WRITING (sluice_s_.pass == 1u)
@@ -187,6 +201,82 @@ inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
 /* Emits `value` to conditional output `slot` unconditionally. A body may emit
  * several records per input (a bounded number) by emitting several times. */
 #define SLUICE_EMIT(slot, buf, value) SLUICE_EMIT_IF(slot, buf, value, 1)
+
+/* Block emission: 16 records at a time, selected by a 16-bit mask.
+ *
+ * On x86 CPUs with AVX-512 (PoCL compiles kernels with the host's features)
+ * a block is written with the compress instruction: the selected lanes are
+ * packed and stored as one 64-byte store, which is what brings conditional
+ * output near the copy bandwidth (bench/README.md). Elsewhere, or when the
+ * host asks for portable kernels (SLUICE_NO_SIMD), the same macros write the
+ * lanes one by one. Either way the result is the same, so the portable path
+ * is tested on the same inputs (tests/meson.build: compact_portable). */
+#if !defined(SLUICE_NO_SIMD) && defined(__AVX512F__) && defined(__clang__) && defined(__has_builtin)
+#if __has_builtin(__builtin_ia32_compresssi512_mask) &&                                            \
+    __has_builtin(__builtin_ia32_compressstoresi512_mask) &&                                       \
+    __has_builtin(__builtin_ia32_storedqusi512_mask) && __has_builtin(__builtin_ia32_cmpd512_mask)
+#define SLUICE_AVX512_ 1
+#endif
+#endif
+
+/* The mask of the non-zero lanes of `c` (bit k for lane k), e.g. of a
+ * vector comparison such as `x < (float16)t`. */
+inline ushort sluice_mask16(int16 c)
+{
+#ifdef SLUICE_AVX512_
+    return __builtin_ia32_cmpd512_mask(c, (int16)0, 4 /* not equal */, (ushort)0xffff);
+#else
+    int l[16];
+    vstore16(c, 0, l);
+    ushort m = 0;
+    for (uint k = 0; k < 16u; ++k)
+        m |= (ushort)((l[k] != 0) << k);
+    return m;
+#endif
+}
+
+inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, uint16 x, ushort m)
+{
+    uint k = popcount((uint)m);
+    if (s->pass == 0u) {
+        s->cnt[slot] += k;
+        return;
+    }
+    uint p = s->pos[slot], lim = s->lim[slot];
+    s->pos[slot] = p + k;
+#ifdef SLUICE_AVX512_
+    /* The kernels run on the host CPU, where every address space is plain
+     * memory: the builtins take a generic pointer, so the global pointer goes
+     * through an integer. A full 16-lane store is safe while it stays inside
+     * this chunk's reserved room: the lanes past the k records written are
+     * overwritten by the chunk's next records. */
+    if (p + 16u <= lim) {
+        __builtin_ia32_storedqusi512_mask(
+            (int *)(size_t)(buf + p),
+            __builtin_ia32_compresssi512_mask(as_int16(x), as_int16(x), m), (ushort)0xffff);
+        return;
+    }
+    if (p + k <= lim) {
+        __builtin_ia32_compressstoresi512_mask((int16 *)(size_t)(buf + p), as_int16(x), m);
+        return;
+    }
+#endif
+    /* Near an overflowing output's capacity, or without AVX-512. */
+    uint v[16];
+    vstore16(x, 0, v);
+    for (uint l = 0; l < 16u; ++l) {
+        if ((m >> l) & 1u) {
+            if (p < lim)
+                buf[p] = v[l];
+            ++p;
+        }
+    }
+}
+
+/* Emits the lanes of `x` (a uint16; use as_uint16 for other 32-bit types)
+ * whose bit is set in `mask` (a ushort) to conditional output `slot`, whose
+ * records are 32-bit words in `buf`, in lane order. */
+#define SLUICE_EMIT16(slot, buf, x, mask) sluice_emit16_(&sluice_s_, (slot), (buf), (x), (mask))
 
 /* Adds `amount` (a uint) to counter `i` of the bound counter set. Aggregated
  * per work-item chunk: one global atomic per chunk and counter. */

@@ -312,5 +312,28 @@ int main(void)
     check_split(ctx, (size_t)1 << 20, 16, 8, SLUICE_ORDERED);
     test_errors(ctx);
     sluice_context_destroy(ctx);
+
+    /* Chunks of 37 and 4096 records: 16-record blocks (SLUICE_EMIT16) with
+     * tails, and chunks whose reserved room is shorter than one block. */
+    const unsigned chunks[] = {37, 4096};
+    for (size_t c = 0; c < sizeof chunks / sizeof *chunks; ++c) {
+        char err[256];
+        sluice_context_options o = {0};
+        o.chunk = chunks[c];
+        CHECK(sluice_context_create(&o, &ctx, err, sizeof err) == SLUICE_OK, "context: %s", err);
+        if (!ctx)
+            break;
+        for (int m = 0; m < 2; ++m) {
+            sluice_output_mode mode = (sluice_output_mode)m;
+            for (size_t si = 0; si < sizeof sizes / sizeof *sizes; ++si) {
+                for (int p = 0; p < F_PATTERNS; ++p) {
+                    check_compact(ctx, sizes[si], 4, p, mode);
+                    check_partition(ctx, sizes[si], SLUICE_F32, p, mode);
+                }
+                check_split(ctx, sizes[si], 4, 5, mode);
+            }
+        }
+        sluice_context_destroy(ctx);
+    }
     return check_summary();
 }

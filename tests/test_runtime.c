@@ -38,6 +38,19 @@ static const char *kernels_src =
     "    SLUICE_FOR_EACH(i)\n"
     "        out[i] = i;\n"
     "}\n"
+    /* Block emission, as in the README's "Writing a kernel". */
+    "__kernel void small_values(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH_RANGE(b, e) {\n"
+    "        uint i = b;\n"
+    "        for (; i + 16u <= e; i += 16u) {\n"
+    "            uint16 x = vload16(0, in + i);\n"
+    "            SLUICE_EMIT16(0, out, x, sluice_mask16(as_int16(x < (uint16)100u)));\n"
+    "        }\n"
+    "        for (; i < e; ++i)\n"
+    "            SLUICE_EMIT_IF(0, out, in[i], in[i] < 100u);\n"
+    "    }\n"
+    "}\n"
     /* Halves every value and keeps those still above 1: a shrinking loop. */
     "__kernel void halve(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
     "{\n"
@@ -297,6 +310,47 @@ static void test_multi_emit(sluice_context *ctx, sluice_program *p, sluice_outpu
     free(got);
 }
 
+/* SLUICE_FOR_EACH_RANGE + SLUICE_EMIT16 against C, on lengths around the
+ * 16-record block, both modes. */
+static void test_block_emit(sluice_context *ctx, sluice_program *p)
+{
+    const size_t sizes[] = {0, 1, 15, 16, 17, 1000, 100003};
+    sluice_kernel *k = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "small_values", &k));
+    for (int m = 0; m < 2; ++m) {
+        for (size_t si = 0; si < sizeof sizes / sizeof *sizes; ++si) {
+            size_t n = sizes[si], rn = 0, len = 0;
+            uint32_t seed = 99u + (uint32_t)n;
+            uint32_t *in = malloc(n * 4 + 4), *ref = malloc(n * 4 + 4), *got = malloc(n * 4 + 4);
+            for (size_t i = 0; i < n; ++i) {
+                in[i] = check_rand(&seed) % 200u;
+                if (in[i] < 100u)
+                    ref[rn++] = in[i];
+            }
+            sluice_stream *a = NULL, *o = NULL;
+            CHECK_OK(ctx, sluice_stream_create(ctx, 4, n ? n : 1, &a));
+            CHECK_OK(ctx, sluice_stream_create(ctx, 4, n ? n : 1, &o));
+            CHECK_OK(ctx, sluice_stream_upload(a, in, n));
+            CHECK_OK(ctx, sluice_kernel_set_input(k, 0, a));
+            CHECK_OK(ctx, sluice_kernel_set_output(k, 1, 0, o, (sluice_output_mode)m));
+            CHECK_OK(ctx, sluice_kernel_launch(k));
+            CHECK_OK(ctx, sluice_stream_download(o, got, n, &len));
+            if (m == SLUICE_UNORDERED && rn > 1 && len == rn) {
+                qsort(got, len, 4, cmp_u32);
+                qsort(ref, rn, 4, cmp_u32);
+            }
+            CHECK(len == rn && (rn == 0 || memcmp(got, ref, rn * 4) == 0),
+                  "block emit n=%zu mode %d: %zu records, want %zu", n, m, len, rn);
+            sluice_stream_destroy(a);
+            sluice_stream_destroy(o);
+            free(in);
+            free(ref);
+            free(got);
+        }
+    }
+    sluice_kernel_destroy(k);
+}
+
 typedef struct loop_user {
     sluice_kernel *k;
     sluice_stream *a, *b;
@@ -485,6 +539,7 @@ int main(void)
                 test_split(ctx, p, sizes[i], pattern, m ? SLUICE_UNORDERED : SLUICE_ORDERED);
     test_multi_emit(ctx, p, SLUICE_ORDERED);
     test_multi_emit(ctx, p, SLUICE_UNORDERED);
+    test_block_emit(ctx, p);
     test_loop(ctx, p);
     test_errors(ctx);
     sluice_program_destroy(p);

@@ -154,6 +154,9 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     const char *prof_env = getenv("SLUICE_PROFILE");
     if (prof_env && *prof_env && strcmp(prof_env, "0") != 0)
         opt.profile = 1;
+    const char *simd_env = getenv("SLUICE_NO_SIMD");
+    if (simd_env && *simd_env && strcmp(simd_env, "0") != 0)
+        opt.no_simd = 1;
 
     pick_state ps = {opt.device, 1, NULL, NULL, 0};
     sluice_status st = for_each_device(pick_visit, &ps);
@@ -183,6 +186,7 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     ctx->device = ps.d;
     fill_info(ps.p, ps.d, &ctx->info);
     ctx->profile = opt.profile;
+    ctx->no_simd = opt.no_simd;
     ctx->chunk = opt.chunk;
     cl_int err;
     cl_context_properties props[] = {CL_CONTEXT_PLATFORM, (cl_context_properties)ps.p, 0};

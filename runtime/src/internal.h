@@ -64,6 +64,7 @@ struct sluice_context {
     cl_kernel scan_kernel;
     /* Profiling. */
     int profile;
+    int no_simd; /* programs are built with -DSLUICE_NO_SIMD */
     sl_profile_slot *prof;
     size_t prof_count, prof_cap;
     sl_pending_event *pending;

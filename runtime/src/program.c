@@ -173,7 +173,7 @@ sluice_status sluice_program_build(sluice_program *p)
         clReleaseProgram(prog);
         return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
     }
-    snprintf(opts, ol, "-cl-std=CL1.2 %s", p->options);
+    snprintf(opts, ol, "-cl-std=CL1.2%s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "", p->options);
     err = clBuildProgram(prog, 1, &ctx->device, opts, NULL, NULL);
     free(opts);
     size_t log_size = 0;

@@ -100,6 +100,10 @@ typedef struct sluice_context_options {
     /** Records each work-item handles in one launch (0: chosen per launch
      *  from the stream size). Larger chunks mean fewer atomics. */
     unsigned chunk;
+    /** Non-zero: build every program with SLUICE_NO_SIMD defined, so kernels
+     *  use only portable OpenCL C and no device-specific fast paths (see
+     *  SLUICE_EMIT16 in sluice.cl). Also enabled by SLUICE_NO_SIMD=1. */
+    int no_simd;
 } sluice_context_options;
 
 typedef struct sluice_context sluice_context;
