@@ -1,0 +1,414 @@
+/* Mesh files through assimp's C API: OBJ with MTL, PLY, glTF 2 and whatever
+ * else assimp reads, flattened into the builder's triangle arrays (the node
+ * hierarchy's transforms applied, one copy of a mesh per node that uses it).
+ *
+ * Positions are checked for NaN and infinity before assimp joins identical
+ * vertices: the join compares positions, and a NaN compares unequal to
+ * everything, so checking afterwards could report a vertex that no longer
+ * matches the file's face order, or none at all. */
+#include "scene.h"
+#include "app_error.h"
+
+#include <assimp/cimport.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Deeper node hierarchies are refused rather than recursed into. */
+#define MAX_NODE_DEPTH 256
+
+/* State of one file being added. */
+typedef struct mesh_file {
+    sluice_scene_builder *b;
+    const struct aiScene *scene;
+    const char *label;
+    const uint32_t *override; /* material for everything, or NULL */
+    uint32_t *material_map;   /* assimp material -> builder index, UINT32_MAX: not yet */
+    char *err;
+    size_t err_size;
+} mesh_file;
+
+static float max3(const float *v)
+{
+    return fmaxf(v[0], fmaxf(v[1], v[2]));
+}
+
+static void get_color(const struct aiMaterial *am, const char *key, unsigned type, unsigned index,
+                      float *out, float dflt)
+{
+    struct aiColor4D c;
+    if (aiGetMaterialColor(am, key, type, index, &c) == aiReturn_SUCCESS) {
+        out[0] = c.r;
+        out[1] = c.g;
+        out[2] = c.b;
+    } else {
+        out[0] = out[1] = out[2] = dflt;
+    }
+}
+
+static float get_float(const struct aiMaterial *am, const char *key, unsigned type, unsigned index,
+                       float dflt)
+{
+    ai_real v;
+    unsigned max = 1;
+    if (aiGetMaterialFloatArray(am, key, type, index, &v, &max) == aiReturn_SUCCESS && max == 1)
+        return (float)v;
+    return dflt;
+}
+
+/* Maps an assimp material (OBJ/MTL terms in the comments) to ours; the rules
+ * are listed at sluice_scene_builder_add_mesh_file. */
+static sluice_material map_material(sluice_scene_builder *b, const char *label,
+                                    const struct aiMaterial *am)
+{
+    struct aiString name;
+    name.length = 0;
+    name.data[0] = '\0';
+    aiGetMaterialString(am, AI_MATKEY_NAME, &name);
+    sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, name.data);
+    float kd[3], ks[3], ke[3], tf[3];
+    get_color(am, AI_MATKEY_COLOR_DIFFUSE, kd, 0.8f);
+    get_color(am, AI_MATKEY_COLOR_SPECULAR, ks, 0.0f);
+    get_color(am, AI_MATKEY_COLOR_EMISSIVE, ke, 0.0f);
+    get_color(am, AI_MATKEY_COLOR_TRANSPARENT, tf, 1.0f); /* MTL Tf */
+    float ns = get_float(am, AI_MATKEY_SHININESS, 0.0f);
+    float ni = get_float(am, AI_MATKEY_REFRACTI, 1.5f);
+    int illum = -1;
+    unsigned max = 1;
+    /* assimp 5.2's OBJ importer keeps MTL's illum as "$mat.illum" (its
+     * $mat.shadingm only distinguishes flat, Gouraud and Phong). */
+    if (aiGetMaterialIntegerArray(am, "$mat.illum", 0, 0, &illum, &max) != aiReturn_SUCCESS)
+        illum = -1;
+    memcpy(m.albedo, kd, sizeof kd);
+    memcpy(m.specular, ks, sizeof ks);
+    m.exponent = ns > 0.0f ? ns : 0.0f;
+    m.ior = ni > 0.0f ? ni : 1.5f;
+    int black_ks = !(max3(ks) > 0.0f);
+    switch (illum) {
+    case -1: /* not an OBJ: glossy when it has a specular lobe */
+        m.kind = !black_ks && ns > 0.0f ? SLUICE_MATERIAL_GLOSSY : SLUICE_MATERIAL_DIFFUSE;
+        break;
+    case 0:
+    case 1:
+    case 10:
+        m.kind = SLUICE_MATERIAL_DIFFUSE;
+        break;
+    case 2:
+        m.kind = black_ks ? SLUICE_MATERIAL_DIFFUSE : SLUICE_MATERIAL_GLOSSY;
+        break;
+    case 3:
+    case 5:
+    case 8:
+        m.kind = SLUICE_MATERIAL_MIRROR;
+        if (black_ks)
+            m.specular[0] = m.specular[1] = m.specular[2] = 1.0f;
+        break;
+    case 4:
+    case 6:
+    case 7:
+    case 9:
+        m.kind = SLUICE_MATERIAL_GLASS;
+        memcpy(m.specular, tf, sizeof tf);
+        if (ni == 1.0f)
+            sluice_scene_builder_warn(b,
+                                      "%s: material '%s': glass with index of refraction 1 "
+                                      "refracts nothing (Ni missing?)",
+                                      label, m.name);
+        break;
+    default:
+        m.kind = SLUICE_MATERIAL_DIFFUSE;
+        sluice_scene_builder_warn(b, "%s: material '%s': unknown illum %d, taken as diffuse", label,
+                                  m.name, illum);
+        break;
+    }
+    if (max3(ke) > 0.0f) {
+        m.kind = SLUICE_MATERIAL_EMISSIVE;
+        memcpy(m.emission, ke, sizeof ke);
+    }
+    return m;
+}
+
+static sluice_status material_for(mesh_file *f, unsigned ai_index, uint32_t *out)
+{
+    if (f->override) {
+        *out = *f->override;
+        return SLUICE_OK;
+    }
+    if (ai_index >= f->scene->mNumMaterials) {
+        sluice_set_error(f->err, f->err_size, "%s: material index %u out of range", f->label,
+                         ai_index);
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    if (f->material_map[ai_index] == UINT32_MAX) {
+        sluice_material m = map_material(f->b, f->label, f->scene->mMaterials[ai_index]);
+        sluice_status st = sluice_scene_builder_add_material(f->b, &m, &f->material_map[ai_index],
+                                                             f->err, f->err_size);
+        if (st != SLUICE_OK)
+            return st;
+    }
+    *out = f->material_map[ai_index];
+    return SLUICE_OK;
+}
+
+/* Row-major product c = a b of 4x4 matrices. */
+static void mat_mul(const double *a, const double *b, double *c)
+{
+    for (int r = 0; r < 4; ++r)
+        for (int k = 0; k < 4; ++k)
+            c[r * 4 + k] = a[r * 4] * b[k] + a[r * 4 + 1] * b[4 + k] + a[r * 4 + 2] * b[8 + k] +
+                           a[r * 4 + 3] * b[12 + k];
+}
+
+static sluice_status add_one_mesh(mesh_file *f, unsigned mi, const double *xf)
+{
+    const struct aiMesh *am = f->scene->mMeshes[mi];
+    if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) || am->mNumFaces == 0)
+        return SLUICE_OK; /* points and lines only */
+    size_t nv = am->mNumVertices, nt = 0;
+    for (unsigned i = 0; i < am->mNumFaces; ++i)
+        nt += am->mFaces[i].mNumIndices == 3;
+    float *pos = malloc((nv ? nv : 1) * 3 * sizeof *pos);
+    float *nrm = am->mNormals ? malloc((nv ? nv : 1) * 3 * sizeof *nrm) : NULL;
+    uint32_t *idx = malloc((nt ? nt : 1) * 3 * sizeof *idx);
+    if (!pos || !idx || (am->mNormals && !nrm)) {
+        free(pos);
+        free(nrm);
+        free(idx);
+        sluice_set_error(f->err, f->err_size, "%s: out of memory", f->label);
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    for (size_t i = 0; i < nv; ++i) {
+        pos[3 * i + 0] = (float)am->mVertices[i].x;
+        pos[3 * i + 1] = (float)am->mVertices[i].y;
+        pos[3 * i + 2] = (float)am->mVertices[i].z;
+        if (nrm) {
+            /* assimp marks missing normals (points, lines) with NaN */
+            float n[3] = {(float)am->mNormals[i].x, (float)am->mNormals[i].y,
+                          (float)am->mNormals[i].z};
+            int ok = isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2]);
+            for (int k = 0; k < 3; ++k)
+                nrm[3 * i + k] = ok ? n[k] : 0.0f;
+        }
+    }
+    size_t t = 0;
+    for (unsigned i = 0; i < am->mNumFaces; ++i) {
+        const struct aiFace *face = &am->mFaces[i];
+        if (face->mNumIndices != 3)
+            continue;
+        for (int k = 0; k < 3; ++k)
+            idx[3 * t + k] = face->mIndices[k];
+        t++;
+    }
+    float m[16];
+    for (int k = 0; k < 16; ++k)
+        m[k] = (float)xf[k];
+    char source[1600]; /* aiString holds up to 1024 bytes */
+    int r = snprintf(source, sizeof source, "%s: mesh %u '%s'", f->label, mi, am->mName.data);
+    (void)r; /* a long name is cut short: it only names the mesh in messages */
+    sluice_mesh_desc d;
+    memset(&d, 0, sizeof d);
+    d.source = source;
+    d.positions = pos;
+    d.vertex_count = nv;
+    d.normals = nrm;
+    d.indices = idx;
+    d.triangle_count = nt;
+    d.transform = m;
+    sluice_status st = material_for(f, am->mMaterialIndex, &d.material);
+    if (st == SLUICE_OK)
+        st = sluice_scene_builder_add_mesh(f->b, &d, f->err, f->err_size);
+    free(pos);
+    free(nrm);
+    free(idx);
+    return st;
+}
+
+static sluice_status add_node(mesh_file *f, const struct aiNode *node, const double *parent,
+                              int depth)
+{
+    if (depth > MAX_NODE_DEPTH) {
+        sluice_set_error(f->err, f->err_size, "%s: node hierarchy deeper than %d", f->label,
+                         MAX_NODE_DEPTH);
+        return SLUICE_ERROR_LIMIT;
+    }
+    const struct aiMatrix4x4 *t = &node->mTransformation;
+    /* assimp's matrices are row-major and act on column vectors, like ours */
+    double local[16] = {t->a1, t->a2, t->a3, t->a4, t->b1, t->b2, t->b3, t->b4,
+                        t->c1, t->c2, t->c3, t->c4, t->d1, t->d2, t->d3, t->d4};
+    double global[16];
+    mat_mul(parent, local, global);
+    for (unsigned i = 0; i < node->mNumMeshes; ++i) {
+        if (node->mMeshes[i] >= f->scene->mNumMeshes) {
+            sluice_set_error(f->err, f->err_size, "%s: node '%s' names mesh %u of %u", f->label,
+                             node->mName.data, node->mMeshes[i], f->scene->mNumMeshes);
+            return SLUICE_ERROR_INVALID_ARGUMENT;
+        }
+        sluice_status st = add_one_mesh(f, node->mMeshes[i], global);
+        if (st != SLUICE_OK)
+            return st;
+    }
+    for (unsigned i = 0; i < node->mNumChildren; ++i) {
+        sluice_status st = add_node(f, node->mChildren[i], global, depth + 1);
+        if (st != SLUICE_OK)
+            return st;
+    }
+    return SLUICE_OK;
+}
+
+/* Finds the first NaN or infinite position, naming the face that uses it. */
+static sluice_status check_finite(const struct aiScene *sc, const char *label, char *err,
+                                  size_t err_size)
+{
+    for (unsigned mi = 0; mi < sc->mNumMeshes; ++mi) {
+        const struct aiMesh *am = sc->mMeshes[mi];
+        for (unsigned v = 0; v < am->mNumVertices; ++v) {
+            const struct aiVector3D *p = &am->mVertices[v];
+            float c[3] = {(float)p->x, (float)p->y, (float)p->z};
+            int k = !isfinite(c[0]) ? 0 : !isfinite(c[1]) ? 1 : !isfinite(c[2]) ? 2 : -1;
+            if (k < 0)
+                continue;
+            long face = -1;
+            int corner = 0;
+            for (unsigned fi = 0; fi < am->mNumFaces && face < 0; ++fi) {
+                for (unsigned j = 0; j < am->mFaces[fi].mNumIndices; ++j) {
+                    if (am->mFaces[fi].mIndices[j] == v) {
+                        face = (long)fi;
+                        corner = (int)j;
+                        break;
+                    }
+                }
+            }
+            /* assimp numbers vertices per face corner, not by the file's
+             * vertex list: name the face too */
+            sluice_set_error(
+                err, err_size,
+                "%s: mesh %u '%s': face %ld, corner %d (vertex %u): coordinate %c is %s "
+                "(%g, %g, %g)",
+                label, mi, am->mName.data, face, corner, v, "xyz"[k],
+                isnan(c[k]) ? "NaN" : "infinite", c[0], c[1], c[2]);
+            return SLUICE_ERROR_INVALID_ARGUMENT;
+        }
+    }
+    return SLUICE_OK;
+}
+
+sluice_status sluice_scene_builder_add_mesh_file(sluice_scene_builder *b, const char *path,
+                                                 const float *transform, const uint32_t *material,
+                                                 const char *label, char *err, size_t err_size)
+{
+    if (!b || !path) {
+        sluice_set_error(err, err_size, "add_mesh_file: invalid argument");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    if (!label)
+        label = path;
+    /* assimp's "Unable to open file" does not say why; ask the system. */
+    FILE *probe = fopen(path, "rb");
+    if (!probe) {
+        int e = errno;
+        sluice_set_error(err, err_size, "%s: cannot open: %s", label,
+                         e == ENOENT ? "no such file" : strerror(e));
+        return e == ENOENT ? SLUICE_ERROR_NOT_FOUND : SLUICE_ERROR_IO;
+    }
+    fclose(probe);
+    if (material && *material >= sluice_scene_builder_material_count(b)) {
+        sluice_set_error(err, err_size, "%s: material %u out of range", label, *material);
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+
+    struct aiPropertyStore *props = aiCreatePropertyStore();
+    if (!props) {
+        sluice_set_error(err, err_size, "%s: out of memory", label);
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    /* SortByPType splits meshes by primitive type and, with this property,
+     * drops the points and lines: a ray tracer has nothing to hit there. */
+    aiSetImportPropertyInteger(props, AI_CONFIG_PP_SBP_REMOVE,
+                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    const struct aiScene *sc = aiImportFileExWithProperties(
+        path, aiProcess_Triangulate | aiProcess_SortByPType, NULL, props);
+    aiReleasePropertyStore(props);
+    if (!sc) {
+        sluice_set_error(err, err_size, "%s: assimp cannot read it: %s", label, aiGetErrorString());
+        return SLUICE_ERROR_IO;
+    }
+    sluice_status st = check_finite(sc, label, err, err_size);
+    if (st != SLUICE_OK) {
+        aiReleaseImport(sc);
+        return st;
+    }
+    const struct aiScene *joined = aiApplyPostProcessing(sc, aiProcess_JoinIdenticalVertices);
+    if (!joined) {
+        /* assimp has released the scene already */
+        sluice_set_error(err, err_size, "%s: assimp cannot join vertices: %s", label,
+                         aiGetErrorString());
+        return SLUICE_ERROR_IO;
+    }
+    sc = joined;
+    if (!sc->mRootNode) {
+        aiReleaseImport(sc);
+        sluice_set_error(err, err_size, "%s: the file has no scene graph", label);
+        return SLUICE_ERROR_IO;
+    }
+
+    mesh_file f;
+    memset(&f, 0, sizeof f);
+    f.b = b;
+    f.scene = sc;
+    f.label = label;
+    f.override = material;
+    f.err = err;
+    f.err_size = err_size;
+    f.material_map = malloc((sc->mNumMaterials ? sc->mNumMaterials : 1) * sizeof(uint32_t));
+    if (!f.material_map) {
+        aiReleaseImport(sc);
+        sluice_set_error(err, err_size, "%s: out of memory", label);
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    for (unsigned i = 0; i < sc->mNumMaterials; ++i)
+        f.material_map[i] = UINT32_MAX;
+    double root[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    if (transform) {
+        for (int k = 0; k < 16; ++k)
+            root[k] = transform[k];
+    }
+    size_t before = sluice_scene_builder_triangle_count(b);
+    st = add_node(&f, sc->mRootNode, root, 0);
+    if (st == SLUICE_OK && sluice_scene_builder_triangle_count(b) == before)
+        sluice_scene_builder_warn(b, "%s: the file has no triangles", label);
+    free(f.material_map);
+    aiReleaseImport(sc);
+    return st;
+}
+
+sluice_status sluice_scene_load_mesh(const char *path, const sluice_scene_load_options *opts,
+                                     sluice_scene **out, char *err, size_t err_size)
+{
+    if (!out || !path) {
+        sluice_set_error(err, err_size, "load_mesh: invalid argument");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    *out = NULL;
+    sluice_scene_builder *b = NULL;
+    if (sluice_scene_builder_create(path, &b) != SLUICE_OK) {
+        sluice_set_error(err, err_size, "%s: out of memory", path);
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    unsigned flags = SLUICE_SCENE_DEFAULT_LIGHT;
+    if (opts) {
+        sluice_scene_builder_set_warning_callback(b, opts->warning, opts->warning_user);
+        flags |= opts->flags;
+    }
+    sluice_status st = sluice_scene_builder_add_mesh_file(b, path, NULL, NULL, path, err, err_size);
+    if (st == SLUICE_OK)
+        st = sluice_scene_builder_finish(b, flags, out, err, err_size);
+    sluice_scene_builder_destroy(b);
+    return st;
+}
