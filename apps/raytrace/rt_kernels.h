@@ -1,0 +1,25 @@
+/* The ray tracer's OpenCL sources (kernels/raytrace/), embedded into the app
+ * at build time (tools/embed_kernels.py --function), and programs built from
+ * them. */
+#ifndef SLUICE_RT_KERNELS_H
+#define SLUICE_RT_KERNELS_H
+
+#include "sluice/sluice.h"
+
+#include <stddef.h>
+
+/** The text of the embedded source with base name `name` ("grid.cl"), or
+ *  NULL when there is none. Generated. */
+const char *rt_kernel_text(const char *name);
+
+/**
+ * Creates a program from embedded sources concatenated in the order given
+ * (e.g. a header shared with the C code first, then the kernels), each
+ * preceded by a #line directive so that compile errors name the right file
+ * and line. `options` are OpenCL build options (may be NULL); the program is
+ * built lazily by the runtime, when its first kernel is created.
+ */
+sluice_status rt_program_create(sluice_context *ctx, const char *const *names, size_t count,
+                                const char *options, sluice_program **out);
+
+#endif /* SLUICE_RT_KERNELS_H */
