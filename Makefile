@@ -21,7 +21,7 @@ build: deps $(BUILD)/build.ninja
 	ninja -C $(BUILD)
 
 demo: build
-	$(BUILD)/apps/examples/split_sign/split_sign --count 10000000 --profile
+	$(BUILD)/apps/raytrace/sluice-raytrace --scene cornell --mode shadow --size 512x512 --out cornell.png
 
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure

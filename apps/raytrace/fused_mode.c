@@ -1,0 +1,36 @@
+/* The `fused` execution mode: one launch of rt_trace_fused over the ray
+ * stream takes every ray through the whole grid (Purcell 5.2.2: the MIMD
+ * alternative to one pass per step). */
+#include "tracer_internal.h"
+
+sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice_stream *hits)
+{
+    sluice_kernel *k = t->k_fused;
+    sluice_status st = sluice_counters_reset(t->counters);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_input(k, 0, rays);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 1, hits, 1);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 2, t->maxima, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 3, t->grid.cell_start, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 4, t->grid.cell_tris, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 5, t->tri_vertices, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 6, sizeof t->grid_args, &t->grid_args);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch(k);
+    uint32_t c[RT_CTR_TRACE_COUNT];
+    if (st == SLUICE_OK)
+        st = sluice_counters_read(t->counters, c);
+    if (st != SLUICE_OK)
+        return st;
+    (void)n;
+    t->stats.voxels += c[RT_CTR_VOXELS];
+    t->stats.tests += c[RT_CTR_TESTS];
+    t->stats.passes += 1;
+    return SLUICE_OK;
+}

@@ -1,0 +1,357 @@
+/* See render.h. */
+#include "render.h"
+
+#include "tracer_internal.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Most shadow rays held at once: a wave whose hits would emit more is shaded
+ * in slices (each slice's shadow rays traced and resolved before the next). */
+#define RT_SHADOW_CAP ((size_t)1 << 20)
+
+/* Shade counters (rt_shade.cl). */
+enum { SC_SHADES = 0, SC_SHADOW, SC_REFLECT, SC_REFRACT, SC_PATH, SC_NONFINITE, SC_COUNT };
+
+struct rt_renderer {
+    rt_tracer *t;
+    rt_render_options opt;
+    rt_frame frame;
+    sluice_kernel *k_raygen, *k_shade, *k_resolve;
+    sluice_counters *counters;
+    sluice_stream *rays, *next, *hits, *shadow, *shadow_hits, *accum;
+    size_t per_shadow, per_secondary;
+    rt_render_stats stats;
+};
+
+static void fail(char *err, size_t err_size, const char *fmt, ...)
+{
+    if (!err || !err_size)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, err_size, fmt, ap);
+    va_end(ap);
+}
+
+static void sub3(const float a[3], const float b[3], float o[3])
+{
+    for (int k = 0; k < 3; ++k)
+        o[k] = a[k] - b[k];
+}
+
+static void norm3(float v[3])
+{
+    float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (l > 0)
+        for (int k = 0; k < 3; ++k)
+            v[k] /= l;
+}
+
+static void cross3(const float a[3], const float b[3], float o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+void rt_camera_frame(const sluice_camera *cam, unsigned width, unsigned height, rt_frame *f)
+{
+    float fwd[3], right[3], up[3];
+    sub3(cam->look_at, cam->eye, fwd);
+    norm3(fwd);
+    cross3(fwd, cam->up, right);
+    norm3(right);
+    cross3(right, fwd, up);
+    float hh = tanf(cam->vfov * 0.5f * 3.14159265358979f / 180.0f);
+    float hw = hh * (float)width / (float)height;
+    for (int k = 0; k < 3; ++k) {
+        f->eye[k] = cam->eye[k];
+        f->corner[k] = fwd[k] - right[k] * hw + up[k] * hh;
+        f->du[k] = right[k] * (2.0f * hw / (float)width);
+        f->dv[k] = -up[k] * (2.0f * hh / (float)height);
+    }
+    f->width = width;
+    f->height = height;
+}
+
+void rt_renderer_destroy(rt_renderer *r)
+{
+    if (!r)
+        return;
+    sluice_kernel_destroy(r->k_raygen);
+    sluice_kernel_destroy(r->k_shade);
+    sluice_kernel_destroy(r->k_resolve);
+    sluice_counters_destroy(r->counters);
+    sluice_stream *s[] = {r->rays, r->next, r->hits, r->shadow, r->shadow_hits, r->accum};
+    for (size_t i = 0; i < sizeof s / sizeof *s; ++i)
+        sluice_stream_destroy(s[i]);
+    free(r);
+}
+
+static size_t bytes_of(sluice_stream *s)
+{
+    return s ? sluice_stream_record_size(s) * (sluice_stream_capacity(s) + 1) : 0;
+}
+
+static void update_bytes(rt_renderer *r)
+{
+    r->stats.stream_bytes = bytes_of(r->rays) + bytes_of(r->next) + bytes_of(r->hits) +
+                            bytes_of(r->shadow) + bytes_of(r->shadow_hits) + bytes_of(r->accum);
+}
+
+sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_renderer **out,
+                                 char *err, size_t err_size)
+{
+    if (out)
+        *out = NULL;
+    if (!t || !opt || !out || opt->mode > RT_MODE_PATH || opt->width == 0 || opt->height == 0 ||
+        opt->width > SLUICE_SCENE_MAX_IMAGE_SIDE || opt->height > SLUICE_SCENE_MAX_IMAGE_SIDE ||
+        (uint64_t)opt->width * opt->height > (1u << 26) || opt->light_samples == 0 ||
+        opt->light_samples > 1024 || opt->max_depth > 64) {
+        fail(err, err_size, "renderer: bad options");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    rt_renderer *r = calloc(1, sizeof *r);
+    if (!r) {
+        fail(err, err_size, "out of host memory");
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    r->t = t;
+    r->opt = *opt;
+    const sluice_scene *sc = t->scene;
+    const sluice_scene_stats *ss = sluice_scene_statistics(sc);
+    rt_frame *f = &r->frame;
+    memset(f, 0, sizeof *f);
+    rt_camera_frame(sluice_scene_camera(sc), opt->width, opt->height, f);
+    f->seed = opt->seed;
+    f->mode = opt->mode;
+    f->max_depth = opt->max_depth;
+    f->light_samples = opt->light_samples;
+    f->point_lights = (rt_u32)ss->point_lights;
+    sluice_area_lights al;
+    sluice_scene_area_lights(sc, &al);
+    f->area_lights = (rt_u32)al.count;
+    f->area_total = (float)al.total_area;
+    float diag = 0, maxabs = 0;
+    for (int k = 0; k < 3; ++k) {
+        float e = ss->bounds_max[k] - ss->bounds_min[k];
+        diag += e * e;
+        maxabs = fmaxf(maxabs, fmaxf(fabsf(ss->bounds_max[k]), fabsf(ss->bounds_min[k])));
+    }
+    /* secondary rays start this far off the surface: relative to the scene's
+     * size, and at least some 32 ulps of its largest coordinate */
+    f->scene_eps = 1e-4f * sqrtf(diag) + 4e-6f * maxabs;
+
+    unsigned mode = opt->mode;
+    int specular_kinds = (ss->kinds_present & (SLUICE_KIND_BIT(SLUICE_MATERIAL_MIRROR) |
+                                               SLUICE_KIND_BIT(SLUICE_MATERIAL_GLASS))) != 0;
+    int glass = (ss->kinds_present & SLUICE_KIND_BIT(SLUICE_MATERIAL_GLASS)) != 0;
+    r->per_shadow =
+        mode == RT_MODE_CAST ? 0 : ss->point_lights + (al.count ? opt->light_samples : 0);
+    r->per_secondary =
+        mode == RT_MODE_PATH ? 1 : (mode == RT_MODE_WHITTED && specular_kinds ? 1 : 0);
+    if (glass && mode == RT_MODE_WHITTED)
+        r->per_secondary = 2;
+
+    size_t pixels = (size_t)opt->width * opt->height;
+    sluice_context *ctx = t->ctx;
+    sluice_status st = sluice_kernel_create(t->program, "rt_raygen", &r->k_raygen);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_shade", &r->k_shade);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_shadow_resolve", &r->k_resolve);
+    static const char *const names[] = {"shades",  "shadow", "reflect",
+                                        "refract", "path",   "nonfinite"};
+    if (st == SLUICE_OK)
+        st = sluice_counters_create(ctx, SC_COUNT, names, &r->counters);
+    size_t shadow_cap = r->per_shadow ? pixels * r->per_shadow : 1;
+    if (shadow_cap > RT_SHADOW_CAP)
+        shadow_cap = RT_SHADOW_CAP > r->per_shadow ? RT_SHADOW_CAP : r->per_shadow;
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, sizeof(rt_ray), pixels, &r->rays);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, sizeof(rt_ray),
+                                  r->per_secondary ? pixels * r->per_secondary : 1, &r->next);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, sizeof(rt_hit), pixels * (r->per_secondary > 1 ? 2 : 1),
+                                  &r->hits);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, sizeof(rt_ray), shadow_cap, &r->shadow);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, sizeof(rt_hit), shadow_cap, &r->shadow_hits);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, 3 * sizeof(int64_t), pixels, &r->accum);
+    if (st == SLUICE_OK) {
+        void *zero = calloc(pixels, 3 * sizeof(int64_t));
+        st = zero ? sluice_stream_upload(r->accum, zero, pixels) : SLUICE_ERROR_OUT_OF_MEMORY;
+        free(zero);
+    }
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_counters(r->k_shade, r->counters);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_counters(r->k_resolve, r->counters);
+    if (st != SLUICE_OK) {
+        fail(err, err_size, "renderer: %s", sluice_context_error(ctx));
+        rt_renderer_destroy(r);
+        return st;
+    }
+    update_bytes(r);
+    *out = r;
+    return SLUICE_OK;
+}
+
+/* Grows `s` to hold at least `n` records (never shrinks). */
+static sluice_status ensure(sluice_stream *s, size_t n)
+{
+    return sluice_stream_capacity(s) >= n ? SLUICE_OK : sluice_stream_grow(s, n);
+}
+
+static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
+{
+    rt_tracer *t = r->t;
+    sluice_kernel *k = r->k_shade;
+    uint32_t b = (uint32_t)base;
+    sluice_status st = sluice_stream_clear(r->shadow);
+    if (st == SLUICE_OK)
+        st = sluice_counters_reset(r->counters);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 0, r->rays, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 1, r->hits, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 2, sizeof b, &b);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(k, 3, 0, r->shadow, SLUICE_UNORDERED);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(k, 4, 1, r->next, SLUICE_UNORDERED);
+    sluice_stream *bufs[] = {r->accum,     t->tri_vertices, t->indices,   t->normals, t->tri_mat,
+                             t->materials, t->point_lights, t->area_tris, t->area_cdf};
+    for (unsigned i = 0; i < 9 && st == SLUICE_OK; ++i)
+        st = sluice_kernel_set_stream(k, 5 + i, bufs[i], 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 14, sizeof r->frame, &r->frame);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(k, count);
+    size_t ns = 0;
+    if (st == SLUICE_OK && r->per_shadow)
+        st = sluice_stream_length(r->shadow, &ns);
+    if (st == SLUICE_OK && ns) {
+        st = rt_tracer_trace_stream(t, r->shadow, ns, r->shadow_hits);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_input(r->k_resolve, 0, r->shadow);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_stream(r->k_resolve, 1, r->shadow_hits, 0);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_stream(r->k_resolve, 2, r->accum, 0);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_launch(r->k_resolve);
+    }
+    uint32_t c[SC_COUNT];
+    if (st == SLUICE_OK)
+        st = sluice_counters_read(r->counters, c);
+    if (st != SLUICE_OK)
+        return st;
+    r->stats.shades += c[SC_SHADES];
+    r->stats.rays[RT_KIND_SHADOW] += c[SC_SHADOW];
+    r->stats.rays[RT_KIND_REFLECT] += c[SC_REFLECT];
+    r->stats.rays[RT_KIND_REFRACT] += c[SC_REFRACT];
+    r->stats.rays[RT_KIND_PATH] += c[SC_PATH];
+    r->stats.nonfinite += c[SC_NONFINITE];
+    return SLUICE_OK;
+}
+
+sluice_status rt_renderer_sample(rt_renderer *r)
+{
+    if (!r)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    rt_tracer *t = r->t;
+    r->frame.sample = r->stats.samples;
+    /* the first sample goes through pixel centres, later ones are jittered */
+    r->frame.jitter = r->stats.samples > 0;
+    size_t w = r->opt.width, h = r->opt.height;
+    size_t tiles = ((w + 7) / 8) * ((h + 7) / 8);
+    sluice_status st = sluice_stream_clear(r->rays);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(r->k_raygen, 0, 0, r->rays, SLUICE_ORDERED);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(r->k_raygen, 1, sizeof r->frame, &r->frame);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(r->k_raygen, tiles * 64);
+    size_t n = w * h;
+    r->stats.rays[RT_KIND_EYE] += n;
+    while (st == SLUICE_OK && n) {
+        r->stats.waves++;
+        st = ensure(r->hits, sluice_stream_capacity(r->rays));
+        if (st == SLUICE_OK)
+            st = rt_tracer_trace_stream(t, r->rays, n, r->hits);
+        if (st == SLUICE_OK && r->per_secondary)
+            st = ensure(r->next, n * r->per_secondary);
+        if (st == SLUICE_OK)
+            st = sluice_stream_clear(r->next);
+        size_t slice = n;
+        if (r->per_shadow && slice * r->per_shadow > sluice_stream_capacity(r->shadow))
+            slice = sluice_stream_capacity(r->shadow) / r->per_shadow;
+        for (size_t base = 0; st == SLUICE_OK && base < n; base += slice)
+            st = shade_slice(r, base, n - base < slice ? n - base : slice);
+        size_t nn = 0;
+        if (st == SLUICE_OK && r->per_secondary)
+            st = sluice_stream_length(r->next, &nn);
+        if (st == SLUICE_OK && nn) {
+            st = sluice_stream_swap(r->rays, r->next);
+            if (st == SLUICE_OK)
+                st = ensure(r->hits, sluice_stream_capacity(r->rays));
+        }
+        n = nn;
+    }
+    if (st == SLUICE_OK)
+        st = rt_tracer_collect_maxima(t);
+    if (st == SLUICE_OK)
+        r->stats.samples++;
+    update_bytes(r);
+    return st;
+}
+
+sluice_status rt_renderer_image(rt_renderer *r, sluice_image *img, size_t *bad_pixels)
+{
+    if (bad_pixels)
+        *bad_pixels = 0;
+    if (!r || !img || sluice_image_width(img) != r->opt.width ||
+        sluice_image_height(img) != r->opt.height || sluice_image_channels(img) != 3)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    size_t pixels = (size_t)r->opt.width * r->opt.height;
+    int64_t *acc = malloc(pixels * 3 * sizeof *acc);
+    if (!acc)
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    sluice_status st = sluice_stream_download(r->accum, acc, pixels, NULL);
+    if (st == SLUICE_OK) {
+        float *px = sluice_image_pixels(img);
+        double scale = 1.0 / ((double)RT_FIXED_SCALE * (r->stats.samples ? r->stats.samples : 1));
+        size_t bad = 0;
+        for (size_t i = 0; i < pixels; ++i) {
+            int ok = 1;
+            float v[3];
+            for (int k = 0; k < 3; ++k) {
+                v[k] = (float)((double)acc[3 * i + k] * scale);
+                ok &= isfinite(v[k]) != 0;
+            }
+            if (!ok) {
+                ++bad;
+                v[0] = v[1] = v[2] = 0.0f;
+            }
+            memcpy(px + 3 * i, v, sizeof v);
+        }
+        if (bad_pixels)
+            *bad_pixels = bad;
+    }
+    free(acc);
+    return st;
+}
+
+const rt_render_stats *rt_renderer_stats(const rt_renderer *r)
+{
+    return r ? &r->stats : NULL;
+}

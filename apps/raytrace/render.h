@@ -1,0 +1,65 @@
+/*
+ * Whole images with the tracer: eye rays from the scene's pinhole camera,
+ * waves of rays through tracing and shading (Purcell Fig. 3.1), samples that
+ * accumulate per pixel (progressive rendering).
+ *
+ * One sample: eye rays -> trace -> shade; shading emits shadow rays (traced
+ * and resolved at once) and secondary rays (reflection, refraction, path
+ * bounces), which form the next wave, until none are left or the depth
+ * limit is reached. Nothing recurses.
+ *
+ * Determinism: random numbers are a hash of (seed, pixel, sample, bounce,
+ * dimension), and pixels accumulate in 64-bit fixed point with integer
+ * atomics, so the same options give the same image bit for bit whatever
+ * order rays finish in.
+ */
+#ifndef SLUICE_RT_RENDER_H
+#define SLUICE_RT_RENDER_H
+
+#include "image.h"
+#include "tracer.h"
+
+/** What to render. */
+typedef struct rt_render_options {
+    unsigned mode;          /**< RT_MODE_* */
+    unsigned width, height; /**< image size */
+    unsigned max_depth;     /**< bounces (whitted, path) */
+    unsigned light_samples; /**< shadow rays per area light and hit */
+    uint32_t seed;
+} rt_render_options;
+
+/** Per-kind ray counts and shading work (Purcell Table 5.2). */
+typedef struct rt_render_stats {
+    uint64_t rays[RT_KIND_COUNT]; /**< rays made, by RT_KIND_* */
+    uint64_t shades;              /**< shading calculations (hits shaded) */
+    uint64_t nonfinite;           /**< contributions dropped as NaN or Inf */
+    unsigned samples;             /**< samples per pixel done */
+    unsigned waves;               /**< ray waves traced (eye + secondary) */
+    size_t stream_bytes;          /**< device bytes of the ray, hit and image streams */
+} rt_render_stats;
+
+typedef struct rt_renderer rt_renderer;
+
+/** Creates a renderer over `tracer` (which must outlive it). */
+sluice_status rt_renderer_create(rt_tracer *tracer, const rt_render_options *opt, rt_renderer **out,
+                                 char *err, size_t err_size);
+
+/** Frees it (NULL is fine). */
+void rt_renderer_destroy(rt_renderer *r);
+
+/** Renders one more sample per pixel. Errors are the context's. */
+sluice_status rt_renderer_sample(rt_renderer *r);
+
+/** Writes the mean of the samples so far into `img` (RGB, the renderer's
+ *  size). Counts pixels that would not be finite (none should be) in
+ *  `*bad_pixels` (may be NULL) and writes 0 there instead. */
+sluice_status rt_renderer_image(rt_renderer *r, sluice_image *img, size_t *bad_pixels);
+
+/** Statistics so far. */
+const rt_render_stats *rt_renderer_stats(const rt_renderer *r);
+
+/** Fills the camera frame for `cam` seen at width x height (exposed for
+ *  tests of the camera). */
+void rt_camera_frame(const sluice_camera *cam, unsigned width, unsigned height, rt_frame *f);
+
+#endif

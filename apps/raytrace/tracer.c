@@ -1,0 +1,421 @@
+/* See tracer.h. Creation: scene upload, grid, program and kernels. */
+#include "tracer_internal.h"
+
+#include "rt_kernels.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+rt_tracer_options rt_tracer_options_default(void)
+{
+    rt_tracer_options o;
+    memset(&o, 0, sizeof o);
+    o.exec = RT_EXEC_STREAM;
+    o.intersector = RT_ISECT_MT;
+    o.grid_build = RT_GRID_BUILD_DEVICE;
+    o.grid_min_dim = RT_GRID_DEFAULT_MIN_DIM;
+    o.intersect_threshold = 0.2f;
+    o.unroll_steps = 1;
+    o.unroll_tests = 1;
+    o.ordered = 0;
+    o.render_mode = RT_MODE_SHADOW;
+    return o;
+}
+
+static void fail(char *err, size_t err_size, const char *fmt, ...)
+{
+    if (!err || !err_size)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, err_size, fmt, ap);
+    va_end(ap);
+}
+
+/* Creates a stream of max(count, 1) records and uploads `count` of them. */
+static sluice_status upload(rt_tracer *t, size_t record, size_t count, const void *data,
+                            sluice_stream **out)
+{
+    sluice_status st = sluice_stream_create(t->ctx, record, count ? count : 1, out);
+    if (st == SLUICE_OK && count)
+        st = sluice_stream_upload(*out, data, count);
+    if (st == SLUICE_OK)
+        t->scene_bytes += record * (count ? count : 1);
+    return st;
+}
+
+static sluice_status upload_scene(rt_tracer *t)
+{
+    const sluice_scene *s = t->scene;
+    size_t nv = sluice_scene_vertex_count(s), nt = sluice_scene_triangle_count(s);
+    const float *pos = sluice_scene_positions(s);
+    const uint32_t *idx = sluice_scene_indices(s);
+    sluice_status st = upload(t, 12, nv, pos, &t->positions);
+    if (st == SLUICE_OK)
+        st = upload(t, 12, nt, idx, &t->indices);
+    if (st == SLUICE_OK)
+        st = upload(t, 4, nt, sluice_scene_triangle_materials(s), &t->tri_mat);
+    if (st != SLUICE_OK)
+        return st;
+
+    /* De-indexed vertices: the intersector reads one 36-byte record per
+     * triangle instead of three indices and three gathers (Purcell 4.2
+     * keeps vertices in a texture indexed by triangle, the same idea). */
+    float *tv = malloc((nt ? nt : 1) * 9 * sizeof *tv);
+    if (!tv)
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    for (size_t i = 0; i < nt; ++i)
+        for (int k = 0; k < 3; ++k)
+            memcpy(tv + 9 * i + 3 * k, pos + 3 * (size_t)idx[3 * i + k], 3 * sizeof *tv);
+    st = upload(t, 36, nt, tv, &t->tri_vertices);
+    free(tv);
+    if (st != SLUICE_OK)
+        return st;
+
+    const float *normals = sluice_scene_normals(s);
+    static const float zero[3] = {0, 0, 0};
+    st = normals ? upload(t, 12, nv, normals, &t->normals) : upload(t, 12, 1, zero, &t->normals);
+    if (st != SLUICE_OK)
+        return st;
+
+    size_t nm = sluice_scene_material_count(s);
+    const sluice_material *mats = sluice_scene_materials(s);
+    rt_material *rm = calloc(nm ? nm : 1, sizeof *rm);
+    if (!rm)
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    for (size_t i = 0; i < nm; ++i) {
+        rm[i].kind = (rt_u32)mats[i].kind;
+        rm[i].ar = mats[i].albedo[0];
+        rm[i].ag = mats[i].albedo[1];
+        rm[i].ab = mats[i].albedo[2];
+        rm[i].sr = mats[i].specular[0];
+        rm[i].sg = mats[i].specular[1];
+        rm[i].sb = mats[i].specular[2];
+        rm[i].exponent = mats[i].exponent;
+        rm[i].ior = mats[i].ior;
+        rm[i].er = mats[i].emission[0];
+        rm[i].eg = mats[i].emission[1];
+        rm[i].eb = mats[i].emission[2];
+    }
+    st = upload(t, sizeof *rm, nm, rm, &t->materials);
+    free(rm);
+    if (st != SLUICE_OK)
+        return st;
+
+    size_t np = sluice_scene_point_light_count(s);
+    const sluice_point_light *pl = sluice_scene_point_lights(s);
+    rt_point_light *rp = calloc(np ? np : 1, sizeof *rp);
+    if (!rp)
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    for (size_t i = 0; i < np; ++i) {
+        rp[i].px = pl[i].position[0];
+        rp[i].py = pl[i].position[1];
+        rp[i].pz = pl[i].position[2];
+        rp[i].ir = pl[i].intensity[0];
+        rp[i].ig = pl[i].intensity[1];
+        rp[i].ib = pl[i].intensity[2];
+    }
+    st = upload(t, sizeof *rp, np, rp, &t->point_lights);
+    free(rp);
+    if (st != SLUICE_OK)
+        return st;
+
+    sluice_area_lights al;
+    sluice_scene_area_lights(s, &al);
+    st = upload(t, 4, al.count, al.triangles, &t->area_tris);
+    if (st == SLUICE_OK)
+        st = upload(t, 4, al.count, al.area_cdf, &t->area_cdf);
+    return st;
+}
+
+static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
+{
+    const sluice_scene_stats *ss = sluice_scene_statistics(t->scene);
+    rt_grid_desc desc;
+    sluice_status st =
+        rt_grid_choose(ss->bounds_min, ss->bounds_max, t->opt.grid_min_dim, &desc, err, err_size);
+    if (st != SLUICE_OK)
+        return st;
+    size_t nt = sluice_scene_triangle_count(t->scene);
+    if (t->opt.grid_build == RT_GRID_BUILD_DEVICE) {
+        st = rt_grid_build_device(t->ctx, &desc, t->positions, t->indices, nt, &t->grid);
+        if (st != SLUICE_OK)
+            fail(err, err_size, "grid: %s", sluice_context_error(t->ctx));
+    } else {
+        rt_grid_host h;
+        memset(&h, 0, sizeof h);
+        st = rt_grid_build_host(&desc, sluice_scene_positions(t->scene),
+                                sluice_scene_indices(t->scene), nt, &h, err, err_size);
+        if (st == SLUICE_OK) {
+            st = rt_grid_upload(t->ctx, &h, &t->grid);
+            if (st != SLUICE_OK)
+                fail(err, err_size, "grid upload: %s", sluice_context_error(t->ctx));
+        }
+        rt_grid_host_free(&h);
+    }
+    if (st != SLUICE_OK)
+        return st;
+    rt_grid_args *g = &t->grid_args;
+    memset(g, 0, sizeof *g);
+    for (int k = 0; k < 3; ++k) {
+        g->lo[k] = t->grid.desc.lo[k];
+        g->hi[k] = t->grid.desc.hi[k];
+        g->cell[k] = t->grid.desc.cell[k];
+        g->inv_cell[k] = 1.0f / t->grid.desc.cell[k];
+        g->dims[k] = (rt_i32)t->grid.desc.dims[k];
+    }
+    return SLUICE_OK;
+}
+
+static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
+{
+    const sluice_scene_stats *ss = sluice_scene_statistics(t->scene);
+    unsigned mode = t->opt.render_mode;
+    int traces_specular = mode == RT_MODE_WHITTED || mode == RT_MODE_PATH;
+    int mirror = traces_specular && (ss->kinds_present & SLUICE_KIND_BIT(SLUICE_MATERIAL_MIRROR));
+    int glass = traces_specular && (ss->kinds_present & SLUICE_KIND_BIT(SLUICE_MATERIAL_GLASS));
+    char opts[256];
+    snprintf(opts, sizeof opts, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s%s%s",
+             t->opt.unroll_steps, t->opt.unroll_tests,
+             t->opt.intersector == RT_ISECT_WATERTIGHT ? " -DRT_WATERTIGHT" : "",
+             mirror ? " -DRT_HAS_MIRROR" : "", glass ? " -DRT_HAS_GLASS" : "",
+             ss->has_normals ? " -DRT_HAS_NORMALS" : "");
+    /* what the scene lets us leave out (Purcell builds only what a scene needs) */
+    char *p = t->skipped;
+    size_t left = sizeof t->skipped;
+    p[0] = '\0';
+#define SKIP(cond, text)                                                                           \
+    do {                                                                                           \
+        if (cond) {                                                                                \
+            int w = snprintf(p, left, "%s%s", p == t->skipped ? "" : "; ", text);                  \
+            if (w > 0 && (size_t)w < left) {                                                       \
+                p += w;                                                                            \
+                left -= (size_t)w;                                                                 \
+            }                                                                                      \
+        }                                                                                          \
+    } while (0)
+    SKIP(traces_specular && !mirror && !glass,
+         "reflection kernels and passes (no mirror or glass)");
+    SKIP(traces_specular && (mirror || glass) && !glass, "refraction code (no glass)");
+    SKIP(!traces_specular, "reflection/refraction (mode does not trace them)");
+    SKIP(mode != RT_MODE_CAST && sluice_scene_light_count(t->scene) == 0,
+         "shadow pass (no lights)");
+    SKIP(mode != RT_MODE_CAST && ss->point_lights == 0, "point-light shadow rays (none)");
+    SKIP(mode != RT_MODE_CAST && ss->emissive_triangles == 0, "area-light sampling (none)");
+    SKIP(mode == RT_MODE_CAST, "shadow pass (cast mode)");
+    SKIP(!ss->has_normals, "normal interpolation (no vertex normals)");
+    SKIP(1, "empty voxels (never sent to the intersector)");
+#undef SKIP
+    static const char *const names[] = {"rt_types.h", "rt_trace.cl", "rt_stream.cl", "rt_fused.cl",
+                                        "rt_shade.cl"};
+    sluice_status st = rt_program_create(t->ctx, names, 5, opts, &t->program);
+    if (st == SLUICE_OK)
+        st = sluice_program_build(t->program);
+    if (st != SLUICE_OK) {
+        fail(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
+        return st;
+    }
+    st = sluice_kernel_create(t->program, "rt_setup", &t->k_setup);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_traverse", &t->k_traverse);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_intersect", &t->k_intersect);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_route", &t->k_route_t);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_route", &t->k_route_i);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_trace_fused", &t->k_fused);
+    if (st != SLUICE_OK)
+        fail(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
+    return st;
+}
+
+sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
+                               const rt_tracer_options *opt, rt_tracer **out, char *err,
+                               size_t err_size)
+{
+    if (out)
+        *out = NULL;
+    if (!ctx || !scene || !out) {
+        fail(err, err_size, "rt_tracer_create: NULL argument");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    rt_tracer_options o = opt ? *opt : rt_tracer_options_default();
+    if (o.grid_min_dim == 0 || o.unroll_steps == 0 || o.unroll_tests == 0 ||
+        o.unroll_steps > 4096 || o.unroll_tests > 4096 || !(o.intersect_threshold >= 0.0f) ||
+        o.intersect_threshold > 1.0f) {
+        fail(err, err_size,
+             "rt_tracer_create: bad options (min dim %u, unroll %u/%u, threshold %g)",
+             o.grid_min_dim, o.unroll_steps, o.unroll_tests, (double)o.intersect_threshold);
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    rt_tracer *t = calloc(1, sizeof *t);
+    if (!t) {
+        fail(err, err_size, "out of host memory");
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    t->ctx = ctx;
+    t->scene = scene;
+    t->opt = o;
+    sluice_status st = upload_scene(t);
+    if (st != SLUICE_OK)
+        fail(err, err_size, "scene upload: %s", sluice_context_error(ctx));
+    if (st == SLUICE_OK)
+        st = build_grid(t, err, err_size);
+    if (st == SLUICE_OK)
+        st = build_program(t, err, err_size);
+    static const char *const ctr_names[] = {"voxels", "tests", "done"};
+    if (st == SLUICE_OK)
+        st = sluice_counters_create(ctx, RT_CTR_TRACE_COUNT, ctr_names, &t->counters);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, 4, 2, &t->maxima);
+    if (st == SLUICE_OK) {
+        static const uint32_t zero[2] = {0, 0};
+        st = sluice_stream_upload(t->maxima, zero, 2);
+    }
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_counters(t->k_fused, t->counters);
+    if (st != SLUICE_OK) {
+        if (err && err_size && !err[0])
+            fail(err, err_size, "ray tracer: %s", sluice_context_error(ctx));
+        rt_tracer_destroy(t);
+        return st;
+    }
+    *out = t;
+    return SLUICE_OK;
+}
+
+void rt_tracer_destroy(rt_tracer *t)
+{
+    if (!t)
+        return;
+    rt_stream_release(t);
+    sluice_kernel_destroy(t->k_setup);
+    sluice_kernel_destroy(t->k_traverse);
+    sluice_kernel_destroy(t->k_intersect);
+    sluice_kernel_destroy(t->k_route_t);
+    sluice_kernel_destroy(t->k_route_i);
+    sluice_kernel_destroy(t->k_fused);
+    sluice_program_destroy(t->program);
+    sluice_counters_destroy(t->counters);
+    sluice_stream_destroy(t->maxima);
+    sluice_stream_destroy(t->host_rays);
+    sluice_stream_destroy(t->host_hits);
+    rt_grid_device_free(&t->grid);
+    sluice_stream *s[] = {t->positions, t->indices,      t->tri_vertices, t->normals, t->tri_mat,
+                          t->materials, t->point_lights, t->area_tris,    t->area_cdf};
+    for (size_t i = 0; i < sizeof s / sizeof *s; ++i)
+        sluice_stream_destroy(s[i]);
+    free(t);
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+sluice_status rt_tracer_trace_stream(rt_tracer *t, sluice_stream *rays, size_t n,
+                                     sluice_stream *hits)
+{
+    if (!t || !rays || !hits)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (n == 0)
+        return SLUICE_OK;
+    if (sluice_stream_record_size(rays) != sizeof(rt_ray) ||
+        sluice_stream_record_size(hits) != sizeof(rt_hit) ||
+        sluice_stream_capacity(hits) < sluice_stream_capacity(rays) ||
+        n > sluice_stream_capacity(rays) || n > UINT32_MAX / 2)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    double t0 = now();
+    sluice_status st = t->opt.exec == RT_EXEC_FUSED ? rt_fused_trace(t, rays, n, hits)
+                                                    : rt_stream_trace(t, rays, n, hits);
+    if (st == SLUICE_OK) {
+        t->stats.rays += n;
+        t->stats.calls++;
+    }
+    t->stats.seconds += now() - t0;
+    return st;
+}
+
+sluice_status rt_tracer_collect_maxima(rt_tracer *t)
+{
+    uint32_t m[2];
+    sluice_status st = sluice_stream_download(t->maxima, m, 2, NULL);
+    if (st != SLUICE_OK)
+        return st;
+    if (m[0] > t->stats.max_steps)
+        t->stats.max_steps = m[0];
+    if (m[1] > t->stats.max_tests)
+        t->stats.max_tests = m[1];
+    return SLUICE_OK;
+}
+
+sluice_status rt_tracer_trace(rt_tracer *t, const rt_ray *rays, size_t n, rt_hit *hits)
+{
+    if (!t || (n && (!rays || !hits)))
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (n == 0)
+        return SLUICE_OK;
+    sluice_status st = SLUICE_OK;
+    if (!t->host_rays || sluice_stream_capacity(t->host_rays) < n) {
+        sluice_stream_destroy(t->host_rays);
+        sluice_stream_destroy(t->host_hits);
+        t->host_rays = t->host_hits = NULL;
+        st = sluice_stream_create(t->ctx, sizeof(rt_ray), n, &t->host_rays);
+        if (st == SLUICE_OK)
+            st = sluice_stream_create(t->ctx, sizeof(rt_hit), n, &t->host_hits);
+        if (st != SLUICE_OK)
+            return st;
+    }
+    st = sluice_stream_upload(t->host_rays, rays, n);
+    if (st == SLUICE_OK)
+        st = rt_tracer_trace_stream(t, t->host_rays, n, t->host_hits);
+    if (st == SLUICE_OK)
+        st = sluice_stream_download(t->host_hits, hits, n, NULL);
+    if (st == SLUICE_OK)
+        st = rt_tracer_collect_maxima(t);
+    return st;
+}
+
+const rt_trace_stats *rt_tracer_stats(const rt_tracer *t)
+{
+    return t ? &t->stats : NULL;
+}
+
+void rt_tracer_reset_stats(rt_tracer *t)
+{
+    if (t)
+        memset(&t->stats, 0, sizeof t->stats);
+}
+
+const rt_grid_device *rt_tracer_grid(const rt_tracer *t)
+{
+    return t ? &t->grid : NULL;
+}
+
+size_t rt_tracer_scene_bytes(const rt_tracer *t)
+{
+    return t ? t->scene_bytes : 0;
+}
+
+size_t rt_tracer_stream_bytes(const rt_tracer *t)
+{
+    return t ? t->state_capacity * 5 * sizeof(rt_state) : 0;
+}
+
+const rt_tracer_options *rt_tracer_get_options(const rt_tracer *t)
+{
+    return t ? &t->opt : NULL;
+}
+
+const char *rt_tracer_skipped(const rt_tracer *t)
+{
+    return t ? t->skipped : "";
+}

@@ -1,0 +1,134 @@
+/*
+ * The ray tracer's device half: a scene uploaded to the device, its uniform
+ * grid, the kernels of Purcell's streaming ray tracer (thesis ch. 3, Fig.
+ * 3.1) built for that scene, and the two ways of running traversal and
+ * intersection over a stream of rays:
+ *
+ *   RT_EXEC_STREAM  multipass (Purcell 3.1 and 4.1.2): a traverse kernel and
+ *                   an intersect kernel, each one step per pass, rays routed
+ *                   between a "traverse" and an "intersect" stream by
+ *                   conditional outputs; an oracle picks the next pass from
+ *                   the stream lengths (intersect once at least
+ *                   `intersect_threshold` of the live rays need it).
+ *   RT_EXEC_FUSED   one kernel takes each ray through the whole grid (the
+ *                   MIMD form, Purcell 5.2.2 "branching").
+ *
+ * Both run the same functions (kernels/raytrace/rt_trace.cl) and find the
+ * same hits. The renderer (render.h) drives whole images with this; tests
+ * call rt_tracer_trace() on rays of their own.
+ *
+ * Conventions are those of <sluice/sluice.h>: functions return a
+ * sluice_status, never abort or print; messages go to `err` (create) or to
+ * the context's error (sluice_context_error) afterwards.
+ */
+#ifndef SLUICE_RT_TRACER_H
+#define SLUICE_RT_TRACER_H
+
+#include "../../kernels/raytrace/rt_types.h"
+#include "grid.h"
+#include "scene.h"
+#include "sluice/sluice.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+/** How traversal and intersection run. */
+typedef enum rt_exec { RT_EXEC_STREAM = 0, RT_EXEC_FUSED = 1 } rt_exec;
+
+/** Which ray-triangle test. */
+typedef enum rt_intersector {
+    RT_ISECT_MT = 0,        /**< Moller-Trumbore (Purcell Fig. 3.2) */
+    RT_ISECT_WATERTIGHT = 1 /**< Woop, Benthin and Wald 2013: no leaks at edges */
+} rt_intersector;
+
+/** How the grid is built. */
+typedef enum rt_grid_build {
+    RT_GRID_BUILD_DEVICE = 0, /**< with the stream algorithms (rt_grid_build_device) */
+    RT_GRID_BUILD_HOST = 1    /**< in plain C, then uploaded */
+} rt_grid_build;
+
+/** Options of rt_tracer_create(); start from rt_tracer_options_default(). */
+typedef struct rt_tracer_options {
+    rt_exec exec;
+    rt_intersector intersector;
+    rt_grid_build grid_build;
+    unsigned grid_min_dim;     /**< voxels along the shortest axis (Purcell 5.2.1) */
+    float intersect_threshold; /**< stream mode: intersect when I >= this * live */
+    unsigned unroll_steps;     /**< stream mode: voxels per traverse pass (k) */
+    unsigned unroll_tests;     /**< stream mode: triangle tests per intersect pass (m) */
+    int ordered;               /**< stream mode: ORDERED outputs (else UNORDERED) */
+    /** Render mode the shading kernels are built for (RT_MODE_*), so that
+     *  code a scene or mode does not need is not compiled. */
+    unsigned render_mode;
+} rt_tracer_options;
+
+/** Defaults: stream, Moller-Trumbore, device grid, RT_GRID_DEFAULT_MIN_DIM,
+ *  threshold 0.2 (Purcell 4.1.2), k = m = 1, unordered, RT_MODE_SHADOW. */
+rt_tracer_options rt_tracer_options_default(void);
+
+/** What tracing has cost so far (Purcell Fig. 5.2, Tables 5.2 and 5.4). */
+typedef struct rt_trace_stats {
+    uint64_t rays;   /**< rays traced */
+    uint64_t voxels; /**< voxels visited, all rays (v = voxels / rays) */
+    uint64_t tests;  /**< triangle tests, all rays (t = tests / rays) */
+    uint64_t passes; /**< stream mode: traverse + intersect passes */
+    uint64_t traverse_passes, intersect_passes;
+    uint64_t calls;           /**< trace calls (ray streams traced) */
+    double live_fraction_sum; /**< stream mode: sum over passes of the share of
+                                   live rays the pass processed */
+    uint32_t max_steps;       /**< most voxels one ray visited */
+    uint32_t max_tests;       /**< most triangle tests one ray did */
+    double seconds;           /**< host wall time spent tracing */
+} rt_trace_stats;
+
+typedef struct rt_tracer rt_tracer;
+
+/**
+ * Uploads `scene`, builds its grid and the kernels. The context and the scene
+ * must outlive the tracer. On failure `*out` is NULL and `err` says why.
+ */
+sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
+                               const rt_tracer_options *opt, rt_tracer **out, char *err,
+                               size_t err_size);
+
+/** Frees the tracer and its device memory (NULL is fine). */
+void rt_tracer_destroy(rt_tracer *t);
+
+/**
+ * Traces `n` rays held on the host and writes their hits (rt_hit.tri is
+ * RT_NO_HIT for a miss). Rays with RT_FLAG_ANY_HIT stop at any hit in
+ * [tmin, tmax]; the others find the nearest. For tests and tools.
+ */
+sluice_status rt_tracer_trace(rt_tracer *t, const rt_ray *rays, size_t n, rt_hit *hits);
+
+/**
+ * Traces the first `n` records of the device stream `rays` (its device length
+ * must be n) and writes hit i to record i of `hits` (capacity >= the
+ * capacity of `rays`). Queues the work; the stream mode waits for its pass
+ * counts. For the renderer.
+ */
+sluice_status rt_tracer_trace_stream(rt_tracer *t, sluice_stream *rays, size_t n,
+                                     sluice_stream *hits);
+
+/** Statistics since creation or the last reset. */
+const rt_trace_stats *rt_tracer_stats(const rt_tracer *t);
+
+/** Forgets the statistics. */
+void rt_tracer_reset_stats(rt_tracer *t);
+
+/** The grid (its description, cell and triangle-reference counts, bytes). */
+const rt_grid_device *rt_tracer_grid(const rt_tracer *t);
+
+/** Device bytes the scene's data take (vertices, triangles, materials,
+ *  lights), and those the tracer's own streams take now. */
+size_t rt_tracer_scene_bytes(const rt_tracer *t);
+size_t rt_tracer_stream_bytes(const rt_tracer *t);
+
+/** The options the tracer was created with. */
+const rt_tracer_options *rt_tracer_get_options(const rt_tracer *t);
+
+/** A text listing what the scene lets the tracer skip (kernels not compiled,
+ *  passes not run), e.g. "refraction (no glass); reflection (no mirror)". */
+const char *rt_tracer_skipped(const rt_tracer *t);
+
+#endif /* SLUICE_RT_TRACER_H */

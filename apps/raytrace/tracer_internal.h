@@ -1,0 +1,62 @@
+/*
+ * The tracer's insides, shared by tracer.c (creation, scene upload),
+ * stream_mode.c, fused_mode.c and render.c. Not part of the tracer's API.
+ */
+#ifndef SLUICE_RT_TRACER_INTERNAL_H
+#define SLUICE_RT_TRACER_INTERNAL_H
+
+#include "tracer.h"
+
+/* Counters of the trace kernels (rt_stream.cl, rt_fused.cl). */
+enum { RT_CTR_VOXELS = 0, RT_CTR_TESTS = 1, RT_CTR_DONE = 2, RT_CTR_TRACE_COUNT = 3 };
+
+struct rt_tracer {
+    sluice_context *ctx;
+    const sluice_scene *scene;
+    rt_tracer_options opt;
+    rt_grid_device grid;
+    rt_grid_args grid_args;
+
+    /* scene data on the device */
+    sluice_stream *positions;    /* float x3 per vertex */
+    sluice_stream *indices;      /* uint x3 per triangle */
+    sluice_stream *tri_vertices; /* float x9 per triangle: the de-indexed vertices */
+    sluice_stream *normals;      /* float x3 per vertex (one zero record when none) */
+    sluice_stream *tri_mat;      /* uint per triangle */
+    sluice_stream *materials;    /* rt_material */
+    sluice_stream *point_lights; /* rt_point_light */
+    sluice_stream *area_tris;    /* uint */
+    sluice_stream *area_cdf;     /* float */
+    size_t scene_bytes;
+
+    sluice_program *program;
+    sluice_kernel *k_setup, *k_traverse, *k_intersect, *k_route_t, *k_route_i, *k_fused;
+    sluice_counters *counters; /* RT_CTR_* */
+    sluice_stream *maxima;     /* uint x2: largest per-ray steps and tests */
+
+    /* stream mode: the traverse and intersect streams (ping-pong pairs) and
+     * the mapped output of the heavy kernels */
+    sluice_stream *trav_in, *trav_out, *isect_in, *isect_out, *scratch;
+    size_t state_capacity;
+    sluice_loop *loop;
+    sluice_stream *watched[2]; /* what the loop watches: trav_in, isect_in */
+
+    /* rt_tracer_trace: host rays in, host hits out */
+    sluice_stream *host_rays, *host_hits;
+
+    rt_trace_stats stats;
+    char skipped[256];
+};
+
+/* The execution modes (stream_mode.c, fused_mode.c). Same contract as
+ * rt_tracer_trace_stream; both add to t->stats. */
+sluice_status rt_stream_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice_stream *hits);
+sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice_stream *hits);
+
+/* Frees the stream mode's loop and streams (stream_mode.c). */
+void rt_stream_release(rt_tracer *t);
+
+/* Reads the per-ray maxima into the statistics and zeroes them. */
+sluice_status rt_tracer_collect_maxima(rt_tracer *t);
+
+#endif

@@ -1,0 +1,772 @@
+/* Tests of the ray tracer (apps/raytrace): hits against a brute-force C ray
+ * caster (no grid: Moller-Trumbore over every triangle, nearest hit) in both
+ * execution modes, the watertight intersector from inside closed meshes,
+ * edge cases of the traversal, images of every mode against stored
+ * references, determinism and the absence of NaN/Inf pixels.
+ *
+ * Usage: test_raytrace [--write-refs DIR] [--cli PATH-TO-sluice-raytrace]
+ *   --write-refs DIR  (re)writes the reference images into DIR and exits
+ *   --cli PATH        runs the command-line checks on PATH instead
+ * RT_TEST_DATA (compile-time) is the directory of the stored references. */
+#include "check.h"
+#include "image_metrics.h"
+#include "render.h"
+#include "scene.h"
+#include "tracer.h"
+
+#include <math.h>
+#include <signal.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#ifndef RT_TEST_DATA
+#define RT_TEST_DATA "."
+#endif
+
+static sluice_context *ctx;
+
+/* ------------------------------------------------------------------ */
+/* Brute-force reference                                              */
+/* ------------------------------------------------------------------ */
+
+/* The same arithmetic as rt_intersect_tri (MT branch), in the same order. */
+static void bf_trace(const sluice_scene *s, const rt_ray *r, rt_hit *h)
+{
+    const float *p = sluice_scene_positions(s);
+    const uint32_t *ix = sluice_scene_indices(s);
+    size_t nt = sluice_scene_triangle_count(s);
+    h->tri = RT_NO_HIT;
+    h->t = r->tmax;
+    h->u = h->v = 0;
+    for (size_t i = 0; i < nt; ++i) {
+        const float *v0 = p + 3 * ix[3 * i], *v1 = p + 3 * ix[3 * i + 1],
+                    *v2 = p + 3 * ix[3 * i + 2];
+        float e1[3] = {v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]};
+        float e2[3] = {v2[0] - v0[0], v2[1] - v0[1], v2[2] - v0[2]};
+        float pv[3] = {r->dy * e2[2] - r->dz * e2[1], r->dz * e2[0] - r->dx * e2[2],
+                       r->dx * e2[1] - r->dy * e2[0]};
+        float det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
+        if (det == 0.0f)
+            continue;
+        float inv = 1.0f / det;
+        float sv[3] = {r->ox - v0[0], r->oy - v0[1], r->oz - v0[2]};
+        float u = (sv[0] * pv[0] + sv[1] * pv[1] + sv[2] * pv[2]) * inv;
+        if (u < 0.0f || u > 1.0f)
+            continue;
+        float q[3] = {sv[1] * e1[2] - sv[2] * e1[1], sv[2] * e1[0] - sv[0] * e1[2],
+                      sv[0] * e1[1] - sv[1] * e1[0]};
+        float v = (r->dx * q[0] + r->dy * q[1] + r->dz * q[2]) * inv;
+        if (v < 0.0f || u + v > 1.0f)
+            continue;
+        float t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
+        if (t >= r->tmin && t < h->t) {
+            h->tri = (uint32_t)i;
+            h->t = t;
+            h->u = u;
+            h->v = v;
+        }
+    }
+}
+
+static float frand(uint32_t *st)
+{
+    return (float)(check_rand(st) >> 8) * (1.0f / 16777216.0f);
+}
+
+static void make_ray(rt_ray *r, const float o[3], const float d[3])
+{
+    memset(r, 0, sizeof *r);
+    r->ox = o[0];
+    r->oy = o[1];
+    r->oz = o[2];
+    float l = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    r->dx = d[0] / l;
+    r->dy = d[1] / l;
+    r->dz = d[2] / l;
+    r->tmin = 0;
+    r->tmax = INFINITY;
+    r->wr = r->wg = r->wb = 1;
+}
+
+static void random_dir(uint32_t *st, float d[3])
+{
+    do {
+        for (int k = 0; k < 3; ++k)
+            d[k] = 2 * frand(st) - 1;
+    } while (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > 1 ||
+             d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < 1e-4f);
+}
+
+/* Random rays: origins in the scene's box grown by 20% each way (so some
+ * start outside the grid), directions uniform; every 8th ray aims at a
+ * random triangle's centroid so that most rays hit. */
+static rt_ray *random_rays(const sluice_scene *s, size_t n, uint32_t seed)
+{
+    rt_ray *r = malloc(n * sizeof *r);
+    const sluice_scene_stats *ss = sluice_scene_statistics(s);
+    const float *p = sluice_scene_positions(s);
+    const uint32_t *ix = sluice_scene_indices(s);
+    size_t nt = sluice_scene_triangle_count(s);
+    uint32_t st = seed;
+    for (size_t i = 0; i < n; ++i) {
+        float o[3], d[3];
+        for (int k = 0; k < 3; ++k) {
+            float lo = ss->bounds_min[k], hi = ss->bounds_max[k], e = hi - lo;
+            o[k] = lo - 0.2f * e + 1.4f * e * frand(&st);
+        }
+        if (i % 8 == 0) {
+            size_t t = check_rand(&st) % nt;
+            for (int k = 0; k < 3; ++k)
+                d[k] =
+                    (p[3 * ix[3 * t] + k] + p[3 * ix[3 * t + 1] + k] + p[3 * ix[3 * t + 2] + k]) /
+                        3.0f -
+                    o[k];
+        } else {
+            random_dir(&st, d);
+        }
+        make_ray(&r[i], o, d);
+    }
+    return r;
+}
+
+typedef struct cmp_result {
+    size_t same, ties, mismatches, hits;
+} cmp_result;
+
+/* Same triangle and t within 1e-5 relative; a different triangle at the same
+ * t (within 1e-5) is a tie (the ray crosses a shared edge or vertex, where
+ * either triangle is the nearest hit) and counted apart. */
+static void compare_hits(const rt_hit *a, const rt_hit *b, size_t n, cmp_result *c,
+                         const char *what)
+{
+    memset(c, 0, sizeof *c);
+    int shown = 0;
+    for (size_t i = 0; i < n; ++i) {
+        int both_miss = a[i].tri == RT_NO_HIT && b[i].tri == RT_NO_HIT;
+        int t_close = a[i].tri != RT_NO_HIT && b[i].tri != RT_NO_HIT &&
+                      fabsf(a[i].t - b[i].t) <= 1e-5f * fmaxf(fabsf(b[i].t), 1e-20f);
+        if (b[i].tri != RT_NO_HIT)
+            c->hits++;
+        if (both_miss || (a[i].tri == b[i].tri && t_close))
+            c->same++;
+        else if (t_close)
+            c->ties++;
+        else {
+            c->mismatches++;
+            if (shown++ < 3)
+                fprintf(stderr, "%s: ray %zu: got tri %u t %.9g, expected tri %u t %.9g\n", what, i,
+                        a[i].tri, (double)a[i].t, b[i].tri, (double)b[i].t);
+        }
+    }
+}
+
+static sluice_scene *load(const char *name)
+{
+    char err[512];
+    sluice_scene_load_options o = {0};
+    o.flags = SLUICE_SCENE_ALLOW_NO_LIGHT;
+    sluice_scene *s = NULL;
+    if (sluice_scene_load(name, &o, &s, err, sizeof err) != SLUICE_OK) {
+        fprintf(stderr, "scene %s: %s\n", name, err);
+        return NULL;
+    }
+    return s;
+}
+
+static rt_tracer *make_tracer(const sluice_scene *s, rt_exec exec, rt_intersector isect,
+                              unsigned mode)
+{
+    char err[1024];
+    rt_tracer_options o = rt_tracer_options_default();
+    o.exec = exec;
+    o.intersector = isect;
+    o.render_mode = mode;
+    rt_tracer *t = NULL;
+    sluice_status st = rt_tracer_create(ctx, s, &o, &t, err, sizeof err);
+    CHECK(st == SLUICE_OK, "rt_tracer_create: %s", err);
+    return t;
+}
+
+static size_t total_rays_checked;
+
+/* Traces `rays` in both modes and compares with the brute force on the first
+ * `nbf` of them (all when nbf == n). */
+static void check_against_bf(const char *name, const sluice_scene *s, rt_ray *rays, size_t n,
+                             size_t nbf)
+{
+    rt_hit *ref = malloc(nbf * sizeof *ref), *got = malloc(n * sizeof *got);
+    for (size_t i = 0; i < nbf; ++i)
+        bf_trace(s, &rays[i], &ref[i]);
+    rt_hit *first = malloc(n * sizeof *first);
+    for (int e = 0; e < 2; ++e) {
+        rt_tracer *t =
+            make_tracer(s, e ? RT_EXEC_FUSED : RT_EXEC_STREAM, RT_ISECT_MT, RT_MODE_CAST);
+        if (!t)
+            break;
+        CHECK_OK(ctx, rt_tracer_trace(t, rays, n, got));
+        cmp_result c;
+        char what[128];
+        snprintf(what, sizeof what, "%s/%s", name, e ? "fused" : "stream");
+        compare_hits(got, ref, nbf, &c, what);
+        printf("%-28s %8zu rays (%zu hit): %zu same, %zu ties at shared edges, %zu mismatches\n",
+               what, nbf, c.hits, c.same, c.ties, c.mismatches);
+        CHECK(c.mismatches == 0, "%s: %zu of %zu rays differ from the brute force", what,
+              c.mismatches, nbf);
+        CHECK(c.ties * 1000 <= nbf, "%s: too many ties (%zu)", what, c.ties);
+        if (e == 0) {
+            memcpy(first, got, n * sizeof *got);
+        } else {
+            /* the two modes run the same math: identical hits on every ray */
+            size_t diff = 0;
+            for (size_t i = 0; i < n; ++i)
+                diff += first[i].tri != got[i].tri || first[i].t != got[i].t ||
+                        first[i].steps != got[i].steps || first[i].tests != got[i].tests;
+            CHECK(diff == 0, "%s: stream and fused differ on %zu of %zu rays", name, diff, n);
+        }
+        rt_tracer_destroy(t);
+    }
+    total_rays_checked += nbf;
+    free(first);
+    free(ref);
+    free(got);
+}
+
+static void test_random_rays(void)
+{
+    struct {
+        const char *name;
+        size_t n, nbf;
+    } cases[] = {{"cornell", 700000, 700000},
+                 {"spheres:20", 200000, 60000},
+                 {"teapotahedron", 200000, 20000},
+                 {"bunny", 200000, 10000},
+                 {"cornell-point", 200000, 200000}};
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; ++c) {
+        sluice_scene *s = load(cases[c].name);
+        if (!s) {
+            if (strcmp(cases[c].name, "bunny") == 0) {
+                printf("bunny not installed: skipped\n");
+                continue;
+            }
+            CHECK(0, "cannot load %s", cases[c].name);
+            continue;
+        }
+        rt_ray *r = random_rays(s, cases[c].n, 1234u + (uint32_t)c);
+        check_against_bf(cases[c].name, s, r, cases[c].n, cases[c].nbf);
+        free(r);
+        sluice_scene_destroy(s);
+    }
+}
+
+/* ------------------------------------------------------------------ */
+/* Small scenes built here                                             */
+/* ------------------------------------------------------------------ */
+
+static sluice_scene *one_triangle(void)
+{
+    sluice_scene_builder *b = NULL;
+    sluice_scene_builder_create("one triangle", &b);
+    char err[256];
+    sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, "d");
+    uint32_t mi;
+    sluice_scene_builder_add_material(b, &m, &mi, err, sizeof err);
+    float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5, 5, 5, 5, 6, 6, 6};
+    uint32_t idx[] = {0, 1, 2, 3, 4, 5}; /* the second one is degenerate: dropped */
+    sluice_mesh_desc md = {0};
+    md.source = "tri";
+    md.positions = pos;
+    md.vertex_count = 6;
+    md.indices = idx;
+    md.triangle_count = 2;
+    md.material = mi;
+    CHECK(sluice_scene_builder_add_mesh(b, &md, err, sizeof err) == SLUICE_OK, "%s", err);
+    sluice_scene *s = NULL;
+    CHECK(sluice_scene_builder_finish(b, SLUICE_SCENE_DEFAULT_LIGHT, &s, err, sizeof err) ==
+              SLUICE_OK,
+          "%s", err);
+    sluice_scene_builder_destroy(b);
+    return s;
+}
+
+static void test_one_triangle_and_edges(void)
+{
+    sluice_scene *s = one_triangle();
+    if (!s)
+        return;
+    CHECK(sluice_scene_triangle_count(s) == 1, "degenerate triangle kept");
+    CHECK(sluice_scene_statistics(s)->degenerate_dropped == 1, "degenerate not counted");
+    rt_ray *r = random_rays(s, 100000, 99);
+    check_against_bf("one-triangle", s, r, 100000, 100000);
+    free(r);
+    sluice_scene_destroy(s);
+
+    /* Axis-parallel rays and rays starting exactly on voxel faces and grid
+     * corners, in cornell. */
+    s = load("cornell");
+    if (!s)
+        return;
+    rt_tracer *t = make_tracer(s, RT_EXEC_FUSED, RT_ISECT_MT, RT_MODE_CAST);
+    if (!t) {
+        sluice_scene_destroy(s);
+        return;
+    }
+    const rt_grid_desc *g = &rt_tracer_grid(t)->desc;
+    size_t n = 60000;
+    rt_ray *rays = malloc(n * sizeof *rays);
+    uint32_t st = 7;
+    for (size_t i = 0; i < n; ++i) {
+        float o[3], d[3] = {0, 0, 0};
+        for (int k = 0; k < 3; ++k) {
+            /* a voxel face (or, for every 4th ray, a grid corner) */
+            unsigned c = check_rand(&st) % (g->dims[k] + 1);
+            if (i % 4 == 0)
+                c = (check_rand(&st) & 1) ? g->dims[k] : 0;
+            o[k] = g->lo[k] + (float)c * g->cell[k];
+            if (i % 3 == 1)
+                o[k] += g->cell[k] * frand(&st);
+        }
+        if (i % 2 == 0) {
+            int axis = (int)(check_rand(&st) % 3);
+            d[axis] = (check_rand(&st) & 1) ? 1.0f : -1.0f;
+        } else {
+            random_dir(&st, d);
+        }
+        make_ray(&rays[i], o, d);
+    }
+    rt_tracer_destroy(t);
+    check_against_bf("cornell-axis-and-corners", s, rays, n, n);
+    free(rays);
+    sluice_scene_destroy(s);
+}
+
+/* ------------------------------------------------------------------ */
+/* Watertightness                                                      */
+/* ------------------------------------------------------------------ */
+
+static int cmp_u64(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return a < b ? -1 : a > b;
+}
+
+/* Non-zero when every undirected edge is shared by exactly two triangles. */
+static int is_closed(const sluice_scene *s)
+{
+    size_t nt = sluice_scene_triangle_count(s);
+    const uint32_t *ix = sluice_scene_indices(s);
+    uint64_t *e = malloc(3 * nt * sizeof *e);
+    for (size_t i = 0; i < nt; ++i)
+        for (int k = 0; k < 3; ++k) {
+            uint64_t a = ix[3 * i + k], b = ix[3 * i + (k + 1) % 3];
+            e[3 * i + k] = a < b ? (a << 32 | b) : (b << 32 | a);
+        }
+    qsort(e, 3 * nt, sizeof *e, cmp_u64);
+    int closed = 1;
+    for (size_t i = 0; i < 3 * nt;) {
+        size_t j = i;
+        while (j < 3 * nt && e[j] == e[i])
+            ++j;
+        closed &= j - i == 2;
+        i = j;
+    }
+    free(e);
+    return closed;
+}
+
+static void leak_test(const char *name, const sluice_scene *s, const float c[3], float radius,
+                      size_t n)
+{
+    rt_ray *rays = malloc(n * sizeof *rays);
+    rt_hit *hits = malloc(n * sizeof *hits);
+    uint32_t st = 4242;
+    for (size_t i = 0; i < n; ++i) {
+        float o[3], d[3];
+        random_dir(&st, o);
+        for (int k = 0; k < 3; ++k)
+            o[k] = c[k] + radius * o[k];
+        random_dir(&st, d);
+        make_ray(&rays[i], o, d);
+    }
+    for (int w = 0; w < 2; ++w) {
+        rt_tracer *t =
+            make_tracer(s, RT_EXEC_FUSED, w ? RT_ISECT_WATERTIGHT : RT_ISECT_MT, RT_MODE_CAST);
+        if (!t)
+            continue;
+        CHECK_OK(ctx, rt_tracer_trace(t, rays, n, hits));
+        size_t leaks = 0;
+        for (size_t i = 0; i < n; ++i)
+            leaks += hits[i].tri == RT_NO_HIT;
+        printf("%-28s %8zu rays from inside: %zu leaks with %s\n", name, n, leaks,
+               w ? "watertight" : "Moller-Trumbore");
+        if (w)
+            CHECK(leaks == 0, "%s: watertight intersector leaked %zu of %zu rays", name, leaks, n);
+        rt_tracer_destroy(t);
+    }
+    free(rays);
+    free(hits);
+}
+
+static void test_watertight(void)
+{
+    sluice_scene_builder *b = NULL;
+    sluice_scene_builder_create("sphere", &b);
+    char err[256];
+    sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, "d");
+    uint32_t mi;
+    sluice_scene_builder_add_material(b, &m, &mi, err, sizeof err);
+    float c[3] = {0.3f, -0.2f, 0.1f};
+    CHECK(sluice_scene_builder_add_sphere(b, c, 1.0f, 24, mi, NULL, err, sizeof err) == SLUICE_OK,
+          "%s", err);
+    sluice_scene *s = NULL;
+    sluice_scene_builder_finish(b, SLUICE_SCENE_DEFAULT_LIGHT, &s, err, sizeof err);
+    sluice_scene_builder_destroy(b);
+    if (s) {
+        CHECK(is_closed(s), "the tessellated sphere is not closed");
+        leak_test("sphere (11520 triangles)", s, c, 0.8f, 1000000);
+        sluice_scene_destroy(s);
+    }
+    s = load("bunny");
+    if (s) {
+        if (is_closed(s))
+            leak_test("bunny", s, (float[3]){0, 0, 0}, 0.05f, 200000);
+        else
+            printf("bunny: not a closed mesh (edges with other than two triangles): no leak "
+                   "test\n");
+        sluice_scene_destroy(s);
+    }
+}
+
+/* ------------------------------------------------------------------ */
+/* Images                                                              */
+/* ------------------------------------------------------------------ */
+
+static const char *const mode_names[] = {"cast", "shadow", "whitted", "path"};
+
+/* Renders `spp` samples; returns the image (NULL on failure) and the
+ * non-finite counts. */
+static sluice_image *render(const sluice_scene *s, rt_exec exec, unsigned mode, unsigned w,
+                            unsigned h, unsigned spp, uint32_t seed)
+{
+    rt_tracer *t = make_tracer(s, exec, RT_ISECT_MT, mode);
+    if (!t)
+        return NULL;
+    const sluice_render_settings *rs = sluice_scene_render_settings(s);
+    rt_render_options o = {0};
+    o.mode = mode;
+    o.width = w;
+    o.height = h;
+    o.max_depth = rs->max_depth;
+    o.light_samples = rs->light_samples > 4 ? 4 : rs->light_samples;
+    o.seed = seed;
+    rt_renderer *r = NULL;
+    char err[512];
+    sluice_image *img = NULL;
+    CHECK(rt_renderer_create(t, &o, &r, err, sizeof err) == SLUICE_OK, "%s", err);
+    sluice_image_create(w, h, 3, &img, err, sizeof err);
+    for (unsigned i = 0; r && i < spp; ++i)
+        CHECK_OK(ctx, rt_renderer_sample(r));
+    size_t bad = 1;
+    if (r)
+        CHECK_OK(ctx, rt_renderer_image(r, img, &bad));
+    CHECK(bad == 0, "%zu non-finite pixels", bad);
+    CHECK(r && rt_renderer_stats(r)->nonfinite == 0, "non-finite contributions");
+    rt_renderer_destroy(r);
+    rt_tracer_destroy(t);
+    return img;
+}
+
+/* Stored references: cornell 64x64, 1 spp (4 for path), fused and stream
+ * compared against the same file. Thresholds: the tracer is deterministic, so
+ * a correct build reproduces the reference up to float rounding across
+ * compilers: rmse <= 1e-3 for cast, shadow and whitted; path tracing,
+ * noisier where a few paths change, rmse <= 1e-2. */
+static void test_reference_images(const char *write_dir)
+{
+    sluice_scene *s = load("cornell");
+    if (!s)
+        return;
+    for (unsigned mode = 0; mode < 4; ++mode) {
+        unsigned spp = mode == RT_MODE_PATH ? 4 : 1;
+        char path[512];
+        snprintf(path, sizeof path, "%s/cornell_%s_64.exr", write_dir ? write_dir : RT_TEST_DATA,
+                 mode_names[mode]);
+        if (write_dir) {
+            sluice_image *img = render(s, RT_EXEC_FUSED, mode, 64, 64, spp, 1);
+            char err[512];
+            CHECK(img && sluice_image_write(img, path, err, sizeof err) == SLUICE_OK, "%s", err);
+            printf("wrote %s\n", path);
+            sluice_image_destroy(img);
+            continue;
+        }
+        sluice_image *ref = NULL;
+        char err[512];
+        if (sluice_image_read(path, &ref, err, sizeof err) != SLUICE_OK) {
+            CHECK(0, "reference %s: %s", path, err);
+            continue;
+        }
+        for (int e = 0; e < 2; ++e) {
+            sluice_image *img = render(s, e ? RT_EXEC_FUSED : RT_EXEC_STREAM, mode, 64, 64, spp, 1);
+            if (!img)
+                continue;
+            sluice_image_metrics m;
+            CHECK(sluice_image_compare(img, ref, &m, err, sizeof err) == SLUICE_OK, "%s", err);
+            double limit = mode == RT_MODE_PATH ? 1e-2 : 1e-3;
+            printf("cornell %-8s %-6s vs reference: rmse %.3g, max %.3g\n", mode_names[mode],
+                   e ? "fused" : "stream", m.rmse, m.max_error);
+            CHECK(m.rmse <= limit && m.nan_count == 0 && m.inf_count == 0, "%s %s: rmse %g > %g",
+                  mode_names[mode], e ? "fused" : "stream", m.rmse, limit);
+            sluice_image_destroy(img);
+        }
+        sluice_image_destroy(ref);
+    }
+    sluice_scene_destroy(s);
+}
+
+static int images_identical(const sluice_image *a, const sluice_image *b)
+{
+    size_t n = (size_t)sluice_image_width(a) * sluice_image_height(a) * 3;
+    return memcmp(sluice_image_pixels_const(a), sluice_image_pixels_const(b), n * sizeof(float)) ==
+           0;
+}
+
+static void test_determinism(void)
+{
+    sluice_scene *s = load("cornell");
+    if (!s)
+        return;
+    sluice_image *a = render(s, RT_EXEC_FUSED, RT_MODE_PATH, 48, 48, 3, 77);
+    sluice_image *b = render(s, RT_EXEC_FUSED, RT_MODE_PATH, 48, 48, 3, 77);
+    sluice_image *c = render(s, RT_EXEC_STREAM, RT_MODE_PATH, 48, 48, 3, 77);
+    sluice_image *d = render(s, RT_EXEC_FUSED, RT_MODE_PATH, 48, 48, 3, 78);
+    if (a && b && c && d) {
+        CHECK(images_identical(a, b), "same seed, different images");
+        CHECK(images_identical(a, c), "stream and fused path images differ");
+        CHECK(!images_identical(a, d), "different seeds, same image");
+    }
+    sluice_image_destroy(a);
+    sluice_image_destroy(b);
+    sluice_image_destroy(c);
+    sluice_image_destroy(d);
+    sluice_scene_destroy(s);
+
+    /* whitted and path on scenes with mirrors and glass: no NaN/Inf */
+    const char *scenes[] = {"glassball", "teapotahedron", "ring"};
+    for (size_t i = 0; i < 3; ++i) {
+        s = load(scenes[i]);
+        if (!s)
+            continue;
+        sluice_image_destroy(render(s, RT_EXEC_FUSED, RT_MODE_WHITTED, 40, 40, 1, 1));
+        sluice_image_destroy(render(s, RT_EXEC_STREAM, RT_MODE_PATH, 32, 32, 2, 1));
+        sluice_scene_destroy(s);
+    }
+}
+
+/* A scene moved by 10^5: the same image within a tolerance (the float grid
+ * of coordinates is ~0.008 there, against ~3e-5 near the origin). */
+static void test_translated(void)
+{
+    sluice_scene *s = load("cornell");
+    if (!s)
+        return;
+    const float off = 1e5f;
+    sluice_scene_builder *b = NULL;
+    sluice_scene_builder_create("cornell+1e5", &b);
+    char err[256];
+    size_t nm = sluice_scene_material_count(s);
+    for (size_t i = 0; i < nm; ++i)
+        sluice_scene_builder_add_material(b, &sluice_scene_materials(s)[i], NULL, err, sizeof err);
+    float m[16] = {1, 0, 0, off, 0, 1, 0, off, 0, 0, 1, off, 0, 0, 0, 1};
+    sluice_mesh_desc md = {0};
+    md.positions = sluice_scene_positions(s);
+    md.vertex_count = sluice_scene_vertex_count(s);
+    md.indices = sluice_scene_indices(s);
+    md.triangle_count = sluice_scene_triangle_count(s);
+    md.materials = sluice_scene_triangle_materials(s);
+    md.transform = m;
+    CHECK(sluice_scene_builder_add_mesh(b, &md, err, sizeof err) == SLUICE_OK, "%s", err);
+    sluice_camera cam = *sluice_scene_camera(s);
+    for (int k = 0; k < 3; ++k) {
+        cam.eye[k] += off;
+        cam.look_at[k] += off;
+    }
+    sluice_scene_builder_set_camera(b, &cam, err, sizeof err);
+    sluice_scene *moved = NULL;
+    CHECK(sluice_scene_builder_finish(b, SLUICE_SCENE_DEFAULT_LIGHT, &moved, err, sizeof err) ==
+              SLUICE_OK,
+          "%s", err);
+    sluice_scene_builder_destroy(b);
+    if (moved) {
+        sluice_image *a = render(s, RT_EXEC_FUSED, RT_MODE_CAST, 64, 64, 1, 1);
+        sluice_image *c = render(moved, RT_EXEC_STREAM, RT_MODE_CAST, 64, 64, 1, 1);
+        sluice_image_metrics mm;
+        if (a && c && sluice_image_compare(c, a, &mm, err, sizeof err) == SLUICE_OK) {
+            printf("cornell moved by 1e5, cast 64x64: rmse %.3g, max %.3g\n", mm.rmse,
+                   mm.max_error);
+            CHECK(mm.rmse <= 0.02, "translated scene: rmse %g", mm.rmse);
+        }
+        sluice_image_destroy(a);
+        sluice_image_destroy(c);
+        sluice_scene_destroy(moved);
+    }
+    sluice_scene_destroy(s);
+}
+
+/* A camera inside the grid (in the middle of the cornell box). */
+static void test_camera_inside(void)
+{
+    sluice_scene *s = load("cornell");
+    if (!s)
+        return;
+    sluice_scene_builder *b = NULL;
+    sluice_scene_builder_create("cornell-inside", &b);
+    char err[256];
+    for (size_t i = 0; i < sluice_scene_material_count(s); ++i)
+        sluice_scene_builder_add_material(b, &sluice_scene_materials(s)[i], NULL, err, sizeof err);
+    sluice_mesh_desc md = {0};
+    md.positions = sluice_scene_positions(s);
+    md.vertex_count = sluice_scene_vertex_count(s);
+    md.indices = sluice_scene_indices(s);
+    md.triangle_count = sluice_scene_triangle_count(s);
+    md.materials = sluice_scene_triangle_materials(s);
+    sluice_scene_builder_add_mesh(b, &md, err, sizeof err);
+    sluice_camera cam = *sluice_scene_camera(s);
+    float eye[3] = {278, 400, 300}, at[3] = {100, 0, 500};
+    memcpy(cam.eye, eye, sizeof eye);
+    memcpy(cam.look_at, at, sizeof at);
+    sluice_scene_builder_set_camera(b, &cam, err, sizeof err);
+    sluice_scene *in = NULL;
+    sluice_scene_builder_finish(b, 0, &in, err, sizeof err);
+    sluice_scene_builder_destroy(b);
+    if (in) {
+        sluice_image *img = render(in, RT_EXEC_STREAM, RT_MODE_CAST, 32, 32, 1, 1);
+        size_t lit = 0;
+        if (img)
+            for (size_t i = 0; i < 32 * 32 * 3; ++i)
+                lit += sluice_image_pixels(img)[i] > 0;
+        CHECK(lit == 32 * 32 * 3, "camera inside the box: %zu of %d values lit", lit, 32 * 32 * 3);
+        sluice_image_destroy(img);
+        sluice_scene_destroy(in);
+    }
+    sluice_scene_destroy(s);
+}
+
+/* ------------------------------------------------------------------ */
+/* Command line                                                        */
+/* ------------------------------------------------------------------ */
+
+/* Runs `cmd` through the shell; returns the exit status (128 + signal for a
+ * signal) and the first part of its stderr in `out`. */
+static int run(const char *cmd, char *out, size_t out_size)
+{
+    char full[2048];
+    snprintf(full, sizeof full, "%s 2>&1", cmd);
+    FILE *p = popen(full, "r");
+    if (!p)
+        return -1;
+    size_t n = fread(out, 1, out_size - 1, p);
+    out[n] = '\0';
+    while (fgetc(p) != EOF) {
+    }
+    int st = pclose(p);
+    if (WIFEXITED(st))
+        return WEXITSTATUS(st);
+    return WIFSIGNALED(st) ? 128 + WTERMSIG(st) : -1;
+}
+
+static void test_cli(const char *exe)
+{
+    char out[8192], cmd[2048];
+    struct {
+        const char *args, *expect;
+    } bad[] = {
+        {"--mode bogus", "--mode"},
+        {"--exec warp", "--exec"},
+        {"--size 0x10", "--size"},
+        {"--size 100000x100000", "--size"},
+        {"--size abc", "--size"},
+        {"--spp 0", "--spp"},
+        {"--spp -3", "--spp"},
+        {"--intersector foo", "--intersector"},
+        {"--grid-min-dim 0", "--grid-min-dim"},
+        {"--intersect-threshold 2", "--intersect-threshold"},
+        {"--out image.bmp", "--out"},
+        {"--frobnicate 1", "--frobnicate"},
+        {"--out x.png --scene", "--scene"},
+        {"--scene no-such-scene-file.obj", "no-such-scene-file.obj"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; ++i) {
+        snprintf(cmd, sizeof cmd, "%s %s --out cli_bad.png", exe, bad[i].args);
+        if (strstr(bad[i].args, "--out"))
+            snprintf(cmd, sizeof cmd, "%s %s", exe, bad[i].args);
+        int rc = run(cmd, out, sizeof out);
+        CHECK(rc != 0 && rc < 128, "%s: exit %d", bad[i].args, rc);
+        CHECK(strstr(out, bad[i].expect) != NULL, "%s: message does not name %s: %s", bad[i].args,
+              bad[i].expect, out);
+    }
+    snprintf(cmd, sizeof cmd, "%s --help", exe);
+    CHECK(run(cmd, out, sizeof out) == 0 && strstr(out, "examples"), "--help");
+
+    snprintf(cmd, sizeof cmd,
+             "%s --scene cornell --mode shadow --size 32x24 --exec fused --out cli_ok.exr "
+             "--stats cli_ok.json --quiet",
+             exe);
+    CHECK(run(cmd, out, sizeof out) == 0, "render: %s", out);
+    FILE *f = fopen("cli_ok.json", "r");
+    CHECK(f != NULL, "no stats file");
+    if (f) {
+        size_t n = fread(out, 1, sizeof out - 1, f);
+        out[n] = '\0';
+        fclose(f);
+        CHECK(strstr(out, "\"v\"") && strstr(out, "\"kernels\""), "stats JSON: %s", out);
+    }
+    sluice_image *img = NULL;
+    char err[256];
+    CHECK(sluice_image_read("cli_ok.exr", &img, err, sizeof err) == SLUICE_OK, "%s", err);
+    CHECK(img && sluice_image_width(img) == 32 && sluice_image_height(img) == 24, "image size");
+    sluice_image_destroy(img);
+
+    /* Ctrl-C: finish the sample, write the image, exit 130 */
+    remove("cli_int.exr");
+    snprintf(cmd, sizeof cmd,
+             "%s --scene cornell --mode path --size 64x64 --spp 100000 --out cli_int.exr --quiet "
+             "--progress & pid=$!; sleep 4; kill -INT $pid; wait $pid",
+             exe);
+    int rc = run(cmd, out, sizeof out);
+    CHECK(rc == 130, "SIGINT: exit %d: %s", rc, out);
+    CHECK(sluice_image_read("cli_int.exr", &img, err, sizeof err) == SLUICE_OK,
+          "no image after SIGINT: %s", err);
+    sluice_image_destroy(img);
+}
+
+int main(int argc, char **argv)
+{
+    const char *write_dir = NULL, *cli = NULL;
+    for (int i = 1; i + 1 < argc; ++i) {
+        if (!strcmp(argv[i], "--write-refs"))
+            write_dir = argv[++i];
+        else if (!strcmp(argv[i], "--cli"))
+            cli = argv[++i];
+    }
+    if (cli) {
+        test_cli(cli);
+        return check_summary();
+    }
+    ctx = check_context(0);
+    if (write_dir) {
+        test_reference_images(write_dir);
+        sluice_context_destroy(ctx);
+        return check_summary();
+    }
+    test_random_rays();
+    test_one_triangle_and_edges();
+    printf("rays checked against the brute force: %zu\n", total_rays_checked);
+    CHECK(total_rays_checked >= 1000000, "only %zu rays checked", total_rays_checked);
+    test_watertight();
+    test_reference_images(NULL);
+    test_determinism();
+    test_translated();
+    test_camera_inside();
+    sluice_context_destroy(ctx);
+    return check_summary();
+}
