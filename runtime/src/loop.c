@@ -3,6 +3,7 @@
  * stops when they are all zero or when the oracle says so. */
 #include "internal.h"
 
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -16,6 +17,7 @@ struct sluice_loop {
     unsigned pass_count, pass_cap;
     uint32_t *values;
     size_t value_count;
+    int counters_fresh; /* read_batched already read the counters */
 };
 
 static double now_seconds(void)
@@ -72,8 +74,55 @@ void sluice_loop_destroy(sluice_loop *l)
     free(l);
 }
 
+/* Most variables one batched read covers. */
+#define SL_LOOP_BATCH 256u
+
+/* Reads the lengths of watched streams not known on the host and the
+ * counters in ONE read of the context's variable pool when they lie within
+ * SL_LOOP_BATCH entries of each other (the usual case: they were made
+ * together), so a pass costs one round trip to the device instead of one per
+ * watched value. */
+static sluice_status read_batched(sluice_loop *l)
+{
+    l->counters_fresh = 0;
+    cl_uint lo = UINT32_MAX, hi = 0;
+    for (size_t i = 0; i < l->desc.stream_count; ++i) {
+        const sluice_stream *s = l->desc.streams[i];
+        if (!s->len_known) {
+            lo = s->var < lo ? s->var : lo;
+            hi = s->var > hi ? s->var : hi;
+        }
+    }
+    const sluice_counters *c = l->desc.counters;
+    if (c && c->count) {
+        lo = c->var < lo ? c->var : lo;
+        hi = c->var + (cl_uint)c->count - 1 > hi ? c->var + (cl_uint)c->count - 1 : hi;
+    }
+    if (lo > hi || hi - lo >= SL_LOOP_BATCH)
+        return SLUICE_OK; /* nothing to read, or too far apart: read one by one */
+    cl_uint v[SL_LOOP_BATCH];
+    sluice_status st = sl_vars_read(l->ctx, lo, hi - lo + 1, v);
+    if (st != SLUICE_OK)
+        return st;
+    for (size_t i = 0; i < l->desc.stream_count; ++i) {
+        sluice_stream *s = l->desc.streams[i];
+        if (!s->len_known) {
+            s->len = v[s->var - lo];
+            s->len_known = true;
+        }
+    }
+    if (c && c->count)
+        for (size_t i = 0; i < c->count; ++i)
+            l->values[l->desc.stream_count + i] = v[c->var - lo + i];
+    l->counters_fresh = c && c->count;
+    return SLUICE_OK;
+}
+
 static sluice_status read_values(sluice_loop *l)
 {
+    sluice_status st0 = read_batched(l);
+    if (st0 != SLUICE_OK)
+        return st0;
     size_t k = 0;
     for (size_t i = 0; i < l->desc.stream_count; ++i) {
         size_t len;
@@ -82,7 +131,7 @@ static sluice_status read_values(sluice_loop *l)
             return st;
         l->values[k++] = (uint32_t)len;
     }
-    if (l->desc.counters) {
+    if (l->desc.counters && !l->counters_fresh) {
         sluice_status st = sluice_counters_read(l->desc.counters, l->values + k);
         if (st != SLUICE_OK)
             return st;
