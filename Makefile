@@ -1,7 +1,8 @@
 # Sluice: the two commands of the README's Quick start, and a few more.
 #   make demo   install what is missing, build, run the demo
 #   make test   install what is missing, build, run the whole suite (ctest)
-#   make bench  run the stream benchmarks (bench/results/streams.json)
+#   make bench  install the benchmarks' peers (Embree), run the benchmarks
+#               (bench/results/streams.json, bench/results/raytrace.json)
 #   make asan   the suite again in an ASan+UBSan build of the host code
 BUILD ?= build
 ASAN_BUILD ?= build-asan
@@ -26,8 +27,14 @@ demo: build
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure
 
-bench: build
+bench:
+	sh tools/install-deps.sh --bench
+	$(MAKE) build
+	@# a build dir configured before Embree was installed must look again
+	@grep -q HAVE_EMBREE $(BUILD)/build.ninja || meson setup --reconfigure $(BUILD) $(MESON_FLAGS)
+	ninja -C $(BUILD)
 	$(BUILD)/bench/bench_streams --out bench/results/streams.json
+	$(BUILD)/bench/bench_raytrace --out bench/results/raytrace.json
 
 $(ASAN_BUILD)/build.ninja: | deps
 	meson setup $(ASAN_BUILD) -Dbuildtype=debug -Db_sanitize=address,undefined \

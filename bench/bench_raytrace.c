@@ -1,0 +1,1060 @@
+/*
+ * bench_raytrace: primary rays per second of the ray tracer against its
+ * peers, measured in one run on the same rays (one per pixel, through the
+ * pixel centre, from the scene's own camera), the same mesh and the same
+ * pixel count:
+ *   (a) Sluice, fused mode (one kernel takes a ray through the whole grid);
+ *   (b) Sluice, stream mode (Purcell's multipass traverse / intersect);
+ *   (c) a plain single-thread C tracer written here: the same uniform grid
+ *       (rt_grid_build_host), the same 3D-DDA and Moller-Trumbore test in
+ *       the same order, so it finds the same hits;
+ *   (d) Intel Embree 3 (when built with it: HAVE_EMBREE), its BVH over the
+ *       same triangles, rtcIntersect16 on 4x4 pixel tiles and rtcIntersect1,
+ *       with 1 and 2 threads (a pthread split of the tile rows: Embree does
+ *       not spawn threads for traversal); the fastest of the four is
+ *       "Embree's best" (normally 2 threads, but a busy machine can make
+ *       the second core worth nothing).
+ * Sluice times are trace time only: rays already in a device stream, hits
+ * left in one, after a warm-up; grid build and program compilation are
+ * reported apart. Every time is the best of --reps runs. Hit agreement
+ * (the fraction of pixels where two peers name the same triangle, or both
+ * miss) keeps the comparison honest.
+ *
+ * Then Purcell's statistics (thesis Fig. 5.2, Table 5.2) for ray casting at
+ * 1024x1024 in stream mode, with grid minimum dimension 64 (his setting for
+ * the bunny) and the default, beside his published bunny figures.
+ *
+ *   bench_raytrace [--size N] [--reps R] [--scene NAME]... [--out FILE]
+ *                  [--purcell-size N] [--skip-purcell] [--quick]
+ *
+ * Exit status 1 when a Sluice mode or the C tracer disagrees with another on
+ * more than 1% of the pixels (a broken tracer), 2 on setup errors.
+ */
+#include "grid.h"
+#include "render.h"
+#include "scene.h"
+#include "tracer.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#ifdef HAVE_EMBREE
+#include <embree3/rtcore.h>
+#include <pmmintrin.h>
+#include <pthread.h>
+#include <xmmintrin.h>
+#endif
+
+#define PROG "bench_raytrace"
+#define MAX_SCENES 8
+#define BUNNY_PATH "/usr/share/glmark2/models/bunny.obj"
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static sluice_context *ctx;
+
+#define TRY(call)                                                                                  \
+    do {                                                                                           \
+        sluice_status st_ = (call);                                                                \
+        if (st_ != SLUICE_OK) {                                                                    \
+            fprintf(stderr, PROG ": %s failed: %s\n", #call, sluice_context_error(ctx));           \
+            exit(2);                                                                               \
+        }                                                                                          \
+    } while (0)
+
+static void *xmalloc(size_t n)
+{
+    void *p = malloc(n ? n : 1);
+    if (!p) {
+        fprintf(stderr, PROG ": out of memory\n");
+        exit(2);
+    }
+    return p;
+}
+
+/* ------------------------------------------------------------------ */
+/* Eye rays                                                            */
+/* ------------------------------------------------------------------ */
+
+/* One ray per pixel through its centre, in 8x8 tiles as the renderer's
+ * rt_raygen orders them (neighbouring rays are neighbours in the stream). */
+static rt_ray *eye_rays(const sluice_scene *sc, unsigned w, unsigned h)
+{
+    rt_frame f;
+    memset(&f, 0, sizeof f);
+    rt_camera_frame(sluice_scene_camera(sc), w, h, &f);
+    rt_ray *rays = xmalloc((size_t)w * h * sizeof *rays);
+    size_t n = 0;
+    for (unsigned ty = 0; ty < h; ty += 8)
+        for (unsigned tx = 0; tx < w; tx += 8)
+            for (unsigned y = ty; y < ty + 8 && y < h; ++y)
+                for (unsigned x = tx; x < tx + 8 && x < w; ++x) {
+                    float px = (float)x + 0.5f, py = (float)y + 0.5f, d[3];
+                    for (int k = 0; k < 3; ++k)
+                        d[k] = f.corner[k] + f.du[k] * px + f.dv[k] * py;
+                    float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                    rt_ray *r = &rays[n++];
+                    memset(r, 0, sizeof *r);
+                    r->ox = f.eye[0];
+                    r->oy = f.eye[1];
+                    r->oz = f.eye[2];
+                    r->dx = d[0] / len;
+                    r->dy = d[1] / len;
+                    r->dz = d[2] / len;
+                    r->tmin = 0.0f;
+                    r->tmax = INFINITY;
+                    r->wr = r->wg = r->wb = 1.0f;
+                    r->pixel = y * w + x;
+                    r->flags = RT_KIND_EYE;
+                }
+    return rays;
+}
+
+/* ------------------------------------------------------------------ */
+/* The plain C tracer: the grid, DDA and test of kernels/raytrace/     */
+/* rt_trace.cl and rt_fused.cl, one ray at a time, one thread          */
+/* ------------------------------------------------------------------ */
+
+typedef struct cgrid {
+    float lo[3], hi[3], cell[3], inv_cell[3];
+    int dims[3];
+    const uint32_t *start, *tris;
+    float *tv; /* 9 floats per triangle */
+} cgrid;
+
+typedef struct cbest {
+    uint32_t tri;
+    float t, u, v;
+} cbest;
+
+static float dot3(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const float a[3], const float b[3], float out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static void c_intersect(const float *tv, uint32_t tri, const float o[3], const float d[3],
+                        float tmin, float limit, cbest *best)
+{
+    const float *p = tv + 9 * (size_t)tri;
+    float e1[3] = {p[3] - p[0], p[4] - p[1], p[5] - p[2]};
+    float e2[3] = {p[6] - p[0], p[7] - p[1], p[8] - p[2]};
+    float pv[3];
+    cross3(d, e2, pv);
+    float det = dot3(e1, pv);
+    if (det == 0.0f)
+        return;
+    float inv = 1.0f / det;
+    float s[3] = {o[0] - p[0], o[1] - p[1], o[2] - p[2]};
+    float u = dot3(s, pv) * inv;
+    if (u < 0.0f || u > 1.0f)
+        return;
+    float q[3];
+    cross3(s, e1, q);
+    float v = dot3(d, q) * inv;
+    if (v < 0.0f || u + v > 1.0f)
+        return;
+    float t = dot3(e2, q) * inv;
+    if (t >= tmin && t <= limit && t < best->t) {
+        best->tri = tri;
+        best->t = t;
+        best->u = u;
+        best->v = v;
+    }
+}
+
+static void c_trace(const cgrid *g, const rt_ray *ray, rt_hit *hit)
+{
+    float o[3] = {ray->ox, ray->oy, ray->oz}, d[3] = {ray->dx, ray->dy, ray->dz}, inv[3];
+    for (int k = 0; k < 3; ++k)
+        inv[k] = d[k] != 0.0f ? 1.0f / d[k] : 0.0f;
+    float tmin = ray->tmin, tmax = ray->tmax;
+    int any_hit = (ray->flags & RT_FLAG_ANY_HIT) != 0;
+    cbest best = {RT_NO_HIT, tmax, 0.0f, 0.0f};
+    uint32_t steps = 0, tests = 0;
+    float t0 = tmin, t1 = tmax;
+    int inside = 1;
+    for (int k = 0; k < 3 && inside; ++k) {
+        if (d[k] == 0.0f) {
+            inside = !(o[k] < g->lo[k] || o[k] > g->hi[k]);
+            continue;
+        }
+        float ta = (g->lo[k] - o[k]) * inv[k], tb = (g->hi[k] - o[k]) * inv[k];
+        t0 = fmaxf(t0, fminf(ta, tb));
+        t1 = fminf(t1, fmaxf(ta, tb));
+    }
+    if (inside && t0 <= t1) {
+        int c[3];
+        for (int k = 0; k < 3; ++k) {
+            float p = o[k] + d[k] * t0;
+            int v = (int)floorf((p - g->lo[k]) * g->inv_cell[k]);
+            c[k] = v < 0 ? 0 : (v > g->dims[k] - 1 ? g->dims[k] - 1 : v);
+        }
+        for (;;) {
+            ++steps;
+            uint32_t ci =
+                (uint32_t)c[0] +
+                (uint32_t)g->dims[0] * ((uint32_t)c[1] + (uint32_t)g->dims[1] * (uint32_t)c[2]);
+            uint32_t a = g->start[ci], b = g->start[ci + 1];
+            /* where the ray leaves the voxel, and through which face */
+            float te = INFINITY;
+            int axis = 0;
+            for (int k = 0; k < 3; ++k) {
+                float bnd = g->lo[k] + (float)(c[k] + (d[k] > 0.0f)) * g->cell[k];
+                float tk = d[k] != 0.0f ? (bnd - o[k]) * inv[k] : INFINITY;
+                if (k == 0 || tk < te) {
+                    te = tk;
+                    axis = k;
+                }
+            }
+            if (a < b) {
+                tests += b - a;
+                float limit = any_hit ? tmax : fminf(te + fabsf(te) * 1e-6f, tmax);
+                for (uint32_t i = a; i < b; ++i)
+                    c_intersect(g->tv, g->tris[i], o, d, tmin, limit, &best);
+                if (best.tri != RT_NO_HIT)
+                    break;
+            }
+            if (te >= tmax)
+                break;
+            c[axis] += d[axis] > 0.0f ? 1 : -1;
+            if (c[axis] < 0 || c[axis] >= g->dims[axis])
+                break;
+        }
+    }
+    hit->tri = best.tri;
+    hit->t = best.t;
+    hit->u = best.u;
+    hit->v = best.v;
+    hit->steps = steps;
+    hit->tests = tests;
+}
+
+static void cgrid_init(cgrid *g, const rt_grid_host *h, const sluice_scene *sc)
+{
+    for (int k = 0; k < 3; ++k) {
+        g->lo[k] = h->desc.lo[k];
+        g->hi[k] = h->desc.hi[k];
+        g->cell[k] = h->desc.cell[k];
+        g->inv_cell[k] = 1.0f / h->desc.cell[k];
+        g->dims[k] = (int)h->desc.dims[k];
+    }
+    g->start = h->cell_start;
+    g->tris = h->cell_tris;
+    size_t nt = sluice_scene_triangle_count(sc);
+    const float *pos = sluice_scene_positions(sc);
+    const uint32_t *idx = sluice_scene_indices(sc);
+    g->tv = xmalloc(9 * nt * sizeof *g->tv);
+    for (size_t i = 0; i < nt; ++i)
+        for (int j = 0; j < 3; ++j)
+            memcpy(g->tv + 9 * i + 3 * j, pos + 3 * (size_t)idx[3 * i + j], 3 * sizeof(float));
+}
+
+/* ------------------------------------------------------------------ */
+/* Embree 3                                                            */
+/* ------------------------------------------------------------------ */
+
+#ifdef HAVE_EMBREE
+typedef struct emb_job {
+    RTCScene scene;
+    const rt_ray *rays; /* by pixel */
+    unsigned w, h;
+    uint32_t *tri; /* by pixel */
+    float *t;
+    int packet; /* 16: rtcIntersect16 on 4x4 tiles; 1: rtcIntersect1 */
+    unsigned thread, threads;
+} emb_job;
+
+static void *emb_worker(void *arg)
+{
+    emb_job *j = arg;
+    /* Embree's recommended floating-point mode for its threads */
+    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+    struct RTCIntersectContext ic;
+    rtcInitIntersectContext(&ic);
+    ic.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    unsigned tiles_x = (j->w + 3) / 4, tiles_y = (j->h + 3) / 4;
+    for (unsigned ty = j->thread; ty < tiles_y; ty += j->threads)
+        for (unsigned tx = 0; tx < tiles_x; ++tx) {
+            if (j->packet == 16) {
+                struct RTCRayHit16 rh;
+                _Alignas(64) int valid[16];
+                for (unsigned k = 0; k < 16; ++k) {
+                    unsigned x = tx * 4 + k % 4, y = ty * 4 + k / 4;
+                    int in = x < j->w && y < j->h;
+                    valid[k] = in ? -1 : 0;
+                    const rt_ray *r = &j->rays[in ? (size_t)y * j->w + x : 0];
+                    rh.ray.org_x[k] = r->ox;
+                    rh.ray.org_y[k] = r->oy;
+                    rh.ray.org_z[k] = r->oz;
+                    rh.ray.dir_x[k] = r->dx;
+                    rh.ray.dir_y[k] = r->dy;
+                    rh.ray.dir_z[k] = r->dz;
+                    rh.ray.tnear[k] = r->tmin;
+                    rh.ray.tfar[k] = r->tmax;
+                    rh.ray.time[k] = 0.0f;
+                    rh.ray.mask[k] = 0xffffffffu;
+                    rh.ray.id[k] = k;
+                    rh.ray.flags[k] = 0;
+                    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+                    rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+                }
+                rtcIntersect16(valid, j->scene, &ic, &rh);
+                for (unsigned k = 0; k < 16; ++k) {
+                    unsigned x = tx * 4 + k % 4, y = ty * 4 + k / 4;
+                    if (x < j->w && y < j->h) {
+                        size_t p = (size_t)y * j->w + x;
+                        int hit = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+                        j->tri[p] = hit ? rh.hit.primID[k] : RT_NO_HIT;
+                        j->t[p] = rh.ray.tfar[k];
+                    }
+                }
+            } else {
+                for (unsigned k = 0; k < 16; ++k) {
+                    unsigned x = tx * 4 + k % 4, y = ty * 4 + k / 4;
+                    if (x >= j->w || y >= j->h)
+                        continue;
+                    size_t p = (size_t)y * j->w + x;
+                    const rt_ray *r = &j->rays[p];
+                    struct RTCRayHit rh;
+                    rh.ray.org_x = r->ox;
+                    rh.ray.org_y = r->oy;
+                    rh.ray.org_z = r->oz;
+                    rh.ray.dir_x = r->dx;
+                    rh.ray.dir_y = r->dy;
+                    rh.ray.dir_z = r->dz;
+                    rh.ray.tnear = r->tmin;
+                    rh.ray.tfar = r->tmax;
+                    rh.ray.time = 0.0f;
+                    rh.ray.mask = 0xffffffffu;
+                    rh.ray.id = 0;
+                    rh.ray.flags = 0;
+                    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                    rtcIntersect1(j->scene, &ic, &rh);
+                    j->tri[p] =
+                        rh.hit.geomID != RTC_INVALID_GEOMETRY_ID ? rh.hit.primID : RT_NO_HIT;
+                    j->t[p] = rh.ray.tfar;
+                }
+            }
+        }
+    return NULL;
+}
+
+/* One frame with `threads` threads; returns the seconds it took. */
+static double emb_frame(RTCScene scene, const rt_ray *rays, unsigned w, unsigned h, uint32_t *tri,
+                        float *t, int packet, unsigned threads)
+{
+    emb_job jobs[2];
+    pthread_t th[2];
+    double t0 = now();
+    for (unsigned i = 0; i < threads; ++i) {
+        jobs[i] = (emb_job){scene, rays, w, h, tri, t, packet, i, threads};
+        if (i > 0 && pthread_create(&th[i], NULL, emb_worker, &jobs[i]) != 0) {
+            fprintf(stderr, PROG ": pthread_create failed\n");
+            exit(2);
+        }
+    }
+    emb_worker(&jobs[0]);
+    for (unsigned i = 1; i < threads; ++i)
+        pthread_join(th[i], NULL);
+    return now() - t0;
+}
+#endif
+
+/* ------------------------------------------------------------------ */
+/* One scene                                                           */
+/* ------------------------------------------------------------------ */
+
+typedef struct peer_hits {
+    uint32_t *tri; /* by pixel */
+    float *t;
+} peer_hits;
+
+typedef struct scene_result {
+    const char *name;
+    size_t triangles;
+    unsigned w, h;
+    uint32_t dims[3];
+    size_t grid_entries;
+    double hit_fraction;
+    double grid_host_s, grid_device_s, tracer_create_s[2];
+    double fused_s, stream_s, c_s;
+    int embree;
+    double emb_build_s, emb_s[2][2]; /* [packet 1 / 16][1 / 2 threads] */
+    const char *emb_best_name;
+    double emb_best_s;
+    unsigned emb_best_threads;
+    /* hit agreement: same triangle (or both miss); and same t within 1e-4 */
+    double agree_stream, agree_c, agree_emb_tri, agree_emb_t;
+} scene_result;
+
+static peer_hits hits_alloc(size_t n)
+{
+    peer_hits p = {xmalloc(n * sizeof(uint32_t)), xmalloc(n * sizeof(float))};
+    return p;
+}
+
+static void hits_free(peer_hits *p)
+{
+    free(p->tri);
+    free(p->t);
+}
+
+static void hits_from_rt(const rt_ray *rays, const rt_hit *h, size_t n, peer_hits *out)
+{
+    for (size_t i = 0; i < n; ++i) {
+        out->tri[rays[i].pixel] = h[i].tri;
+        out->t[rays[i].pixel] = h[i].t;
+    }
+}
+
+static double agree_tri(const peer_hits *a, const peer_hits *b, size_t n)
+{
+    size_t same = 0;
+    for (size_t i = 0; i < n; ++i)
+        same += a->tri[i] == b->tri[i];
+    return n ? (double)same / (double)n : 1.0;
+}
+
+#ifdef HAVE_EMBREE
+static double agree_t(const peer_hits *a, const peer_hits *b, size_t n)
+{
+    size_t same = 0;
+    for (size_t i = 0; i < n; ++i) {
+        int ha = a->tri[i] != RT_NO_HIT, hb = b->tri[i] != RT_NO_HIT;
+        if (!ha && !hb)
+            ++same;
+        else if (ha && hb && fabsf(a->t[i] - b->t[i]) <= 1e-4f * fmaxf(1.0f, fabsf(a->t[i])))
+            ++same;
+    }
+    return n ? (double)same / (double)n : 1.0;
+}
+#endif
+
+static sluice_scene *load_scene(const char *name)
+{
+    char err[512];
+    sluice_scene_load_options o = {0};
+    o.flags = SLUICE_SCENE_ALLOW_NO_LIGHT;
+    sluice_scene *sc = NULL;
+    if (sluice_scene_load(name, &o, &sc, err, sizeof err) != SLUICE_OK) {
+        fprintf(stderr, PROG ": %s\n", err);
+        return NULL;
+    }
+    return sc;
+}
+
+static rt_tracer *make_tracer(const sluice_scene *sc, rt_exec exec, unsigned min_dim,
+                              double *seconds)
+{
+    char err[512];
+    rt_tracer_options o = rt_tracer_options_default();
+    o.exec = exec;
+    o.grid_min_dim = min_dim;
+    o.render_mode = RT_MODE_CAST;
+    rt_tracer *t = NULL;
+    double t0 = now();
+    if (rt_tracer_create(ctx, sc, &o, &t, err, sizeof err) != SLUICE_OK) {
+        fprintf(stderr, PROG ": rt_tracer_create: %s\n", err);
+        exit(2);
+    }
+    TRY(sluice_context_finish(ctx));
+    if (seconds)
+        *seconds = now() - t0;
+    return t;
+}
+
+/* Best of `reps` traces of the device ray stream (after one warm-up);
+ * leaves the hits of the last run in `out`. */
+static double time_sluice(rt_tracer *t, sluice_stream *rays_s, sluice_stream *hits_s,
+                          const rt_ray *rays, size_t n, unsigned reps, peer_hits *out)
+{
+    double best = 1e30;
+    for (unsigned r = 0; r <= reps; ++r) {
+        TRY(sluice_context_finish(ctx));
+        double t0 = now();
+        TRY(rt_tracer_trace_stream(t, rays_s, n, hits_s));
+        TRY(sluice_context_finish(ctx));
+        double s = now() - t0;
+        if (r > 0 && s < best)
+            best = s;
+    }
+    rt_hit *h = xmalloc(n * sizeof *h);
+    size_t got = 0;
+    TRY(sluice_stream_download(hits_s, h, n, &got));
+    if (got != n) {
+        fprintf(stderr, PROG ": %zu hits for %zu rays\n", got, n);
+        exit(2);
+    }
+    hits_from_rt(rays, h, n, out);
+    free(h);
+    return best;
+}
+
+static int run_scene(const char *name, unsigned size, unsigned reps, scene_result *res)
+{
+    char err[512];
+    memset(res, 0, sizeof *res);
+    sluice_scene *sc = load_scene(name);
+    if (!sc)
+        return 0;
+    res->name = name;
+    res->triangles = sluice_scene_triangle_count(sc);
+    res->w = res->h = size;
+    size_t n = (size_t)size * size;
+    rt_ray *rays = eye_rays(sc, size, size);
+    rt_ray *by_pixel = xmalloc(n * sizeof *by_pixel);
+    for (size_t i = 0; i < n; ++i)
+        by_pixel[rays[i].pixel] = rays[i];
+
+    /* the grid: plain C build (also the C tracer's) and the device build */
+    const sluice_scene_stats *ss = sluice_scene_statistics(sc);
+    rt_grid_desc desc;
+    if (rt_grid_choose(ss->bounds_min, ss->bounds_max, RT_GRID_DEFAULT_MIN_DIM, &desc, err,
+                       sizeof err) != SLUICE_OK) {
+        fprintf(stderr, PROG ": %s: %s\n", name, err);
+        exit(2);
+    }
+    memcpy(res->dims, desc.dims, sizeof res->dims);
+    rt_grid_host gh = {0};
+    for (unsigned r = 0; r <= reps; ++r) {
+        rt_grid_host_free(&gh);
+        double t0 = now();
+        if (rt_grid_build_host(&desc, sluice_scene_positions(sc), sluice_scene_indices(sc),
+                               res->triangles, &gh, err, sizeof err) != SLUICE_OK) {
+            fprintf(stderr, PROG ": %s: grid: %s\n", name, err);
+            exit(2);
+        }
+        double s = now() - t0;
+        if (r > 0 && (r == 1 || s < res->grid_host_s))
+            res->grid_host_s = s;
+    }
+    size_t cells = (size_t)desc.dims[0] * desc.dims[1] * desc.dims[2];
+    res->grid_entries = gh.cell_start[cells];
+    {
+        size_t nv = sluice_scene_vertex_count(sc);
+        sluice_stream *sp = NULL, *si = NULL;
+        TRY(sluice_stream_create(ctx, 12, nv, &sp));
+        TRY(sluice_stream_create(ctx, 12, res->triangles, &si));
+        TRY(sluice_stream_upload(sp, sluice_scene_positions(sc), nv));
+        TRY(sluice_stream_upload(si, sluice_scene_indices(sc), res->triangles));
+        for (unsigned r = 0; r <= reps; ++r) {
+            rt_grid_device g = {0};
+            TRY(sluice_context_finish(ctx));
+            double t0 = now();
+            if (rt_grid_build_device(ctx, &desc, sp, si, res->triangles, &g) != SLUICE_OK) {
+                fprintf(stderr, PROG ": %s: device grid: %s\n", name, g.message);
+                exit(2);
+            }
+            TRY(sluice_context_finish(ctx));
+            double s = now() - t0;
+            rt_grid_device_free(&g);
+            if (r > 0 && (r == 1 || s < res->grid_device_s))
+                res->grid_device_s = s;
+        }
+        sluice_stream_destroy(sp);
+        sluice_stream_destroy(si);
+    }
+
+    /* (a), (b): Sluice, rays already on the device */
+    sluice_stream *rays_s = NULL, *hits_s = NULL;
+    TRY(sluice_stream_create(ctx, sizeof(rt_ray), n, &rays_s));
+    TRY(sluice_stream_create(ctx, sizeof(rt_hit), n, &hits_s));
+    TRY(sluice_stream_upload(rays_s, rays, n));
+    peer_hits fused = hits_alloc(n), stream = hits_alloc(n), cref = hits_alloc(n);
+    rt_tracer *tf =
+        make_tracer(sc, RT_EXEC_FUSED, RT_GRID_DEFAULT_MIN_DIM, &res->tracer_create_s[0]);
+    res->fused_s = time_sluice(tf, rays_s, hits_s, rays, n, reps, &fused);
+    rt_tracer_destroy(tf);
+    rt_tracer *ts =
+        make_tracer(sc, RT_EXEC_STREAM, RT_GRID_DEFAULT_MIN_DIM, &res->tracer_create_s[1]);
+    res->stream_s = time_sluice(ts, rays_s, hits_s, rays, n, reps, &stream);
+    rt_tracer_destroy(ts);
+    sluice_stream_destroy(rays_s);
+    sluice_stream_destroy(hits_s);
+
+    /* (c): plain C, one thread, same ray order */
+    cgrid cg;
+    cgrid_init(&cg, &gh, sc);
+    rt_hit *ch = xmalloc(n * sizeof *ch);
+    res->c_s = 1e30;
+    for (unsigned r = 0; r < reps; ++r) {
+        double t0 = now();
+        for (size_t i = 0; i < n; ++i)
+            c_trace(&cg, &rays[i], &ch[i]);
+        double s = now() - t0;
+        if (s < res->c_s)
+            res->c_s = s;
+    }
+    hits_from_rt(rays, ch, n, &cref);
+    free(ch);
+    free(cg.tv);
+    rt_grid_host_free(&gh);
+
+    size_t hit = 0;
+    for (size_t i = 0; i < n; ++i)
+        hit += fused.tri[i] != RT_NO_HIT;
+    res->hit_fraction = n ? (double)hit / (double)n : 0.0;
+    res->agree_stream = agree_tri(&fused, &stream, n);
+    res->agree_c = agree_tri(&fused, &cref, n);
+
+    /* (d): Embree */
+#ifdef HAVE_EMBREE
+    res->embree = 1;
+    RTCDevice dev = rtcNewDevice(NULL);
+    if (!dev) {
+        fprintf(stderr, PROG ": rtcNewDevice failed\n");
+        exit(2);
+    }
+    RTCScene es = rtcNewScene(dev);
+    rtcSetSceneBuildQuality(es, RTC_BUILD_QUALITY_HIGH);
+    RTCGeometry geo = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+    size_t nv = sluice_scene_vertex_count(sc);
+    float *vb = rtcSetNewGeometryBuffer(geo, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                        3 * sizeof(float), nv);
+    uint32_t *ib = rtcSetNewGeometryBuffer(geo, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                           3 * sizeof(uint32_t), res->triangles);
+    if (!vb || !ib) {
+        fprintf(stderr, PROG ": Embree buffers: error %d\n", (int)rtcGetDeviceError(dev));
+        exit(2);
+    }
+    memcpy(vb, sluice_scene_positions(sc), 3 * nv * sizeof(float));
+    memcpy(ib, sluice_scene_indices(sc), 3 * res->triangles * sizeof(uint32_t));
+    double t0 = now();
+    rtcCommitGeometry(geo);
+    rtcAttachGeometry(es, geo);
+    rtcReleaseGeometry(geo);
+    rtcCommitScene(es);
+    res->emb_build_s = now() - t0;
+    if (rtcGetDeviceError(dev) != RTC_ERROR_NONE) {
+        fprintf(stderr, PROG ": Embree scene build failed\n");
+        exit(2);
+    }
+    peer_hits emb = hits_alloc(n);
+    static const int packets[2] = {1, 16};
+    res->emb_best_s = 1e30;
+    res->emb_best_threads = 2;
+    for (int p = 0; p < 2; ++p)
+        for (unsigned th = 1; th <= 2; ++th) {
+            double best = 1e30;
+            for (unsigned r = 0; r <= reps; ++r) {
+                double s = emb_frame(es, by_pixel, size, size, emb.tri, emb.t, packets[p], th);
+                if (r > 0 && s < best)
+                    best = s;
+            }
+            res->emb_s[p][th - 1] = best;
+            /* Embree's best on the cores Sluice has: 2 threads normally, 1
+             * when the other core is busy and 2 threads lose */
+            if (best < res->emb_best_s) {
+                res->emb_best_s = best;
+                res->emb_best_threads = th;
+                res->emb_best_name = packets[p] == 16 ? "rtcIntersect16" : "rtcIntersect1";
+            }
+        }
+    /* the hits of the last run (rtcIntersect16, 2 threads) */
+    res->agree_emb_tri = agree_tri(&fused, &emb, n);
+    res->agree_emb_t = agree_t(&fused, &emb, n);
+    hits_free(&emb);
+    rtcReleaseScene(es);
+    rtcReleaseDevice(dev);
+#endif
+
+    hits_free(&fused);
+    hits_free(&stream);
+    hits_free(&cref);
+    free(rays);
+    free(by_pixel);
+    sluice_scene_destroy(sc);
+    return 1;
+}
+
+/* ------------------------------------------------------------------ */
+/* Purcell's statistics                                                */
+/* ------------------------------------------------------------------ */
+
+typedef struct purcell_row {
+    const char *scene;
+    unsigned min_dim;
+    uint32_t dims[3];
+    double v, t, s;
+    uint64_t passes, traverse_passes, intersect_passes;
+    uint32_t max_steps, max_tests;
+    double live_percent;   /* ours: share of the live rays each pass processed */
+    double active_percent; /* Purcell's: 100 (v + t) / P, of all rays */
+    double seconds;
+} purcell_row;
+
+static int purcell_run(const char *name, unsigned size, unsigned min_dim, purcell_row *row)
+{
+    sluice_scene *sc = load_scene(name);
+    if (!sc)
+        return 0;
+    size_t n = (size_t)size * size;
+    rt_ray *rays = eye_rays(sc, size, size);
+    rt_hit *hits = xmalloc(n * sizeof *hits);
+    rt_tracer *t = make_tracer(sc, RT_EXEC_STREAM, min_dim, NULL);
+    rt_tracer_reset_stats(t);
+    double t0 = now();
+    TRY(rt_tracer_trace(t, rays, n, hits));
+    double secs = now() - t0;
+    const rt_trace_stats *st = rt_tracer_stats(t);
+    size_t hit = 0;
+    for (size_t i = 0; i < n; ++i)
+        hit += hits[i].tri != RT_NO_HIT;
+    memset(row, 0, sizeof *row);
+    row->scene = name;
+    row->min_dim = min_dim;
+    memcpy(row->dims, rt_tracer_grid(t)->desc.dims, sizeof row->dims);
+    double rays_n = st->rays ? (double)st->rays : 1.0;
+    row->v = (double)st->voxels / rays_n;
+    row->t = (double)st->tests / rays_n;
+    row->s = (double)hit / rays_n; /* ray casting: one shading per hit */
+    row->passes = st->passes;
+    row->traverse_passes = st->traverse_passes;
+    row->intersect_passes = st->intersect_passes;
+    row->max_steps = st->max_steps;
+    row->max_tests = st->max_tests;
+    row->live_percent = st->passes ? 100.0 * st->live_fraction_sum / (double)st->passes : 0.0;
+    row->active_percent = st->passes ? 100.0 * (row->v + row->t) / (double)st->passes : 0.0;
+    row->seconds = secs;
+    rt_tracer_destroy(t);
+    free(rays);
+    free(hits);
+    sluice_scene_destroy(sc);
+    return 1;
+}
+
+/* ------------------------------------------------------------------ */
+/* Main                                                                */
+/* ------------------------------------------------------------------ */
+
+static int parse_uint(const char *s, unsigned max, unsigned *out)
+{
+    if (!s || *s < '0' || *s > '9')
+        return 0;
+    char *end;
+    errno = 0;
+    unsigned long v = strtoul(s, &end, 10);
+    if (errno || *end || v > max)
+        return 0;
+    *out = (unsigned)v;
+    return 1;
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: " PROG " [--size N] [--reps R] [--scene NAME]... [--out FILE]\n"
+               "                      [--purcell-size N] [--skip-purcell] [--quick]\n"
+               "  --size N          image side for the rays/s comparison (default 512)\n"
+               "  --reps R          timed runs per peer, best kept (default 10)\n"
+               "  --scene NAME      scene (default cornell and bunny); repeatable\n"
+               "  --out FILE        write the results as JSON\n"
+               "  --purcell-size N  image side for Purcell's statistics (default 1024)\n"
+               "  --skip-purcell    no Purcell statistics\n"
+               "  --quick           smoke test: 64x64, 1 rep, Purcell at 64x64\n");
+}
+
+static double rate(size_t n, double s)
+{
+    return s > 0 ? (double)n / s : 0.0;
+}
+
+int main(int argc, char **argv)
+{
+    const char *scenes[MAX_SCENES], *out = NULL;
+    size_t nscenes = 0;
+    unsigned size = 512, reps = 10, psize = 1024;
+    int skip_purcell = 0, quick = 0;
+    for (int i = 1; i < argc; ++i) {
+        if (strcmp(argv[i], "--scene") == 0 && i + 1 < argc && nscenes < MAX_SCENES)
+            scenes[nscenes++] = argv[++i];
+        else if (strcmp(argv[i], "--size") == 0 && i + 1 < argc &&
+                 parse_uint(argv[i + 1], 8192, &size) && size > 0)
+            ++i;
+        else if (strcmp(argv[i], "--purcell-size") == 0 && i + 1 < argc &&
+                 parse_uint(argv[i + 1], 8192, &psize) && psize > 0)
+            ++i;
+        else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc &&
+                 parse_uint(argv[i + 1], 1000, &reps) && reps > 0)
+            ++i;
+        else if (strcmp(argv[i], "--out") == 0 && i + 1 < argc)
+            out = argv[++i];
+        else if (strcmp(argv[i], "--skip-purcell") == 0)
+            skip_purcell = 1;
+        else if (strcmp(argv[i], "--quick") == 0) {
+            quick = 1;
+            size = 64;
+            reps = 1;
+            psize = 64;
+        } else if (strcmp(argv[i], "--help") == 0) {
+            usage(stdout);
+            return 0;
+        } else {
+            usage(stderr);
+            return 2;
+        }
+    }
+    FILE *probe = fopen(BUNNY_PATH, "rb");
+    int have_bunny = probe != NULL;
+    if (probe)
+        fclose(probe);
+    if (nscenes == 0) {
+        scenes[nscenes++] = "cornell";
+        if (have_bunny)
+            scenes[nscenes++] = "bunny";
+        else
+            fprintf(stderr, PROG ": no " BUNNY_PATH " (glmark2-data): bunny skipped\n");
+    }
+
+    char err[512];
+    if (sluice_context_create(NULL, &ctx, err, sizeof err) != SLUICE_OK) {
+        fprintf(stderr, PROG ": %s\n", err);
+        return 2;
+    }
+    sluice_device_info info;
+    TRY(sluice_context_device(ctx, &info));
+    printf("device: %s / %s, %u compute units\n", info.platform, info.name, info.compute_units);
+#ifdef HAVE_EMBREE
+    printf("Embree %s, BVH build quality high, 1 and 2 threads\n", RTC_VERSION_STRING);
+#else
+    printf("Embree: not built in (install libembree-dev: sh tools/install-deps.sh --bench)\n");
+#endif
+
+    scene_result res[MAX_SCENES];
+    int status = 0;
+    size_t n = (size_t)size * size;
+    printf("\nprimary rays, %ux%u, one per pixel centre, best of %u; M rays/s\n", size, size, reps);
+    printf("%-10s %9s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s\n", "scene", "triangles", "fused",
+           "stream", "C 1t", "Emb 1t", "Emb 2t", "f/Emb", "s/f", "f/C", "=stream", "=Embree");
+    for (size_t i = 0; i < nscenes; ++i) {
+        scene_result *r = &res[i];
+        if (!run_scene(scenes[i], size, reps, r)) {
+            status = 2;
+            r->name = NULL;
+            continue;
+        }
+        if (r->embree)
+            printf("%-10s %9zu %8.2f %8.2f %8.2f %8.2f %8.2f %8.3f %8.3f %8.2f %7.2f%% %7.2f%%\n",
+                   r->name, r->triangles, rate(n, r->fused_s) / 1e6, rate(n, r->stream_s) / 1e6,
+                   rate(n, r->c_s) / 1e6, rate(n, fmin(r->emb_s[0][0], r->emb_s[1][0])) / 1e6,
+                   rate(n, fmin(r->emb_s[0][1], r->emb_s[1][1])) / 1e6, r->emb_best_s / r->fused_s,
+                   r->fused_s / r->stream_s, r->c_s / r->fused_s, 100 * r->agree_stream,
+                   100 * r->agree_emb_tri);
+        else
+            printf("%-10s %9zu %8.2f %8.2f %8.2f %8s %8s %8s %8.3f %8.2f %7.2f%% %8s\n", r->name,
+                   r->triangles, rate(n, r->fused_s) / 1e6, rate(n, r->stream_s) / 1e6,
+                   rate(n, r->c_s) / 1e6, "-", "-", "-", r->fused_s / r->stream_s,
+                   r->c_s / r->fused_s, 100 * r->agree_stream, "-");
+        if (r->agree_stream < 0.99 || r->agree_c < 0.99) {
+            fprintf(stderr, PROG ": %s: hits disagree (stream %.4f, C %.4f of pixels)\n", r->name,
+                    r->agree_stream, r->agree_c);
+            status = 1;
+        }
+        if (r->embree && r->agree_emb_tri < 0.99)
+            fprintf(stderr, PROG ": warning: %s: Embree agrees on %.2f%% of pixels only\n", r->name,
+                    100 * r->agree_emb_tri);
+    }
+    printf("(Emb 1t, 2t: Embree's faster of rtcIntersect1 and rtcIntersect16 on 1 and 2 threads; "
+           "f/Emb: fused over Embree's best; s/f: stream over fused; f/C: fused "
+           "over 1-thread C; =: same hit triangle as fused)\n");
+    for (size_t i = 0; i < nscenes; ++i) {
+        scene_result *r = &res[i];
+        if (!r->name)
+            continue;
+        printf("%-10s grid %ux%ux%u, %zu entries: C build %.4f s, device build %.4f s; tracer "
+               "create %.3f s (fused) %.3f s (stream); hits %.1f%%; =C %.2f%%",
+               r->name, r->dims[0], r->dims[1], r->dims[2], r->grid_entries, r->grid_host_s,
+               r->grid_device_s, r->tracer_create_s[0], r->tracer_create_s[1],
+               100 * r->hit_fraction, 100 * r->agree_c);
+        if (r->embree)
+            printf("; Embree BVH %.4f s, 1/16-wide 1t %.2f/%.2f, 2t %.2f/%.2f M rays/s, same t "
+                   "%.2f%%",
+                   r->emb_build_s, rate(n, r->emb_s[0][0]) / 1e6, rate(n, r->emb_s[1][0]) / 1e6,
+                   rate(n, r->emb_s[0][1]) / 1e6, rate(n, r->emb_s[1][1]) / 1e6,
+                   100 * r->agree_emb_t);
+        printf("\n");
+    }
+
+    /* Purcell's statistics */
+    static const char *const purcell_scenes[] = {"cornell", "teapotahedron", "bunny"};
+    purcell_row prow[6];
+    size_t nprow = 0;
+    if (!skip_purcell) {
+        printf("\nPurcell's statistics (Fig. 5.2, Table 5.2): ray casting %ux%u, stream mode\n",
+               psize, psize);
+        printf("%-14s %4s %12s %8s %8s %6s %6s %8s %8s %7s %9s %8s\n", "scene", "min", "grid", "v",
+               "t", "s", "P", "max trv", "max isc", "live%", "active%", "seconds");
+        unsigned dims[2] = {64, RT_GRID_DEFAULT_MIN_DIM};
+        for (size_t i = 0; i < 3; ++i) {
+            if (strcmp(purcell_scenes[i], "bunny") == 0 && !have_bunny)
+                continue;
+            for (int d = 0; d < 2; ++d) {
+                purcell_row *p = &prow[nprow];
+                if (!purcell_run(purcell_scenes[i], psize, dims[d], p)) {
+                    status = 2;
+                    continue;
+                }
+                ++nprow;
+                char grid[48];
+                snprintf(grid, sizeof grid, "%ux%ux%u", p->dims[0], p->dims[1], p->dims[2]);
+                printf("%-14s %4u %12s %8.2f %8.2f %6.3f %6llu %8u %8u %6.1f%% %8.1f%% %8.3f\n",
+                       p->scene, p->min_dim, grid, p->v, p->t, p->s, (unsigned long long)p->passes,
+                       p->max_steps, p->max_tests, p->live_percent, p->active_percent, p->seconds);
+            }
+        }
+        printf("%-14s %4u %12s %8.2f %8.2f %6.3f %6u %8u %8u %7s %8.1f%%   (Purcell 2004)\n",
+               "bunny, Purcell", 64u, "98x64x163", 93.93, 13.88, 0.82, 1085u, 221u, 328u, "-",
+               10.5);
+        printf("(live%%: share of the live rays a pass processed, averaged over passes; active%%: "
+               "100 (v + t) / P, Purcell's share of all rays active per pass)\n");
+    }
+
+    if (out) {
+        FILE *f = fopen(out, "w");
+        if (!f) {
+            fprintf(stderr, PROG ": cannot write %s\n", out);
+            sluice_context_destroy(ctx);
+            return 2;
+        }
+        fprintf(f, "{\n  \"benchmark\": \"bench_raytrace\",\n");
+        fprintf(f,
+                "  \"device\": {\"platform\": \"%s\", \"name\": \"%s\", \"compute_units\": %u, "
+                "\"opencl_c\": \"%s\"},\n",
+                info.platform, info.name, info.compute_units, info.version);
+        fprintf(f,
+                "  \"setup\": {\"width\": %u, \"height\": %u, \"rays_per_pixel\": 1, \"rays\": "
+                "\"primary, through the pixel centres, the scene's camera, 8x8-tile order\", "
+                "\"reps\": %u, \"timing\": \"best of reps after a warm-up; Sluice: trace only, "
+                "rays and hits in device streams\", \"grid_min_dim\": %u, \"quick\": %s},\n",
+                size, size, reps, RT_GRID_DEFAULT_MIN_DIM, quick ? "true" : "false");
+#ifdef HAVE_EMBREE
+        fprintf(f,
+                "  \"embree\": {\"available\": true, \"version\": \"%s\", \"build_quality\": "
+                "\"high\", \"threads\": \"1 or 2, a pthread split of 4-pixel tile rows\", "
+                "\"best\": \"the fastest of variants x threads\", \"variants\": "
+                "[\"rtcIntersect1\", \"rtcIntersect16 (4x4 tiles)\"]},\n",
+                RTC_VERSION_STRING);
+#else
+        fprintf(
+            f, "  \"embree\": {\"available\": false, \"why\": \"built without Embree 3 "
+               "(install libembree-dev: sh tools/install-deps.sh --bench, then reconfigure)\"},\n");
+#endif
+        fprintf(f, "  \"scenes\": [");
+        int first = 1;
+        for (size_t i = 0; i < nscenes; ++i) {
+            scene_result *r = &res[i];
+            if (!r->name)
+                continue;
+            fprintf(f, "%s\n    {\"scene\": \"%s\", \"triangles\": %zu, \"hit_fraction\": %.6f,\n",
+                    first ? "" : ",", r->name, r->triangles, r->hit_fraction);
+            first = 0;
+            fprintf(f,
+                    "     \"grid\": {\"dims\": [%u, %u, %u], \"entries\": %zu, "
+                    "\"build_seconds_c\": %.6f, \"build_seconds_device\": %.6f, "
+                    "\"tracer_create_seconds_fused\": %.6f, "
+                    "\"tracer_create_seconds_stream\": %.6f},\n",
+                    r->dims[0], r->dims[1], r->dims[2], r->grid_entries, r->grid_host_s,
+                    r->grid_device_s, r->tracer_create_s[0], r->tracer_create_s[1]);
+            fprintf(f,
+                    "     \"rays_per_second\": {\"sluice_fused\": %.1f, \"sluice_stream\": %.1f, "
+                    "\"c_grid_1thread\": %.1f",
+                    rate(n, r->fused_s), rate(n, r->stream_s), rate(n, r->c_s));
+            if (r->embree)
+                fprintf(f,
+                        ", \"embree_best\": %.1f, \"embree_intersect1_1thread\": %.1f, "
+                        "\"embree_intersect1_2threads\": "
+                        "%.1f, \"embree_intersect16_1thread\": %.1f, "
+                        "\"embree_intersect16_2threads\": %.1f",
+                        rate(n, r->emb_best_s), rate(n, r->emb_s[0][0]), rate(n, r->emb_s[0][1]),
+                        rate(n, r->emb_s[1][0]), rate(n, r->emb_s[1][1]));
+            else
+                fprintf(f, ", \"embree_best\": null");
+            fprintf(f, "},\n");
+            fprintf(f,
+                    "     \"seconds\": {\"sluice_fused\": %.6f, \"sluice_stream\": %.6f, "
+                    "\"c_grid_1thread\": %.6f",
+                    r->fused_s, r->stream_s, r->c_s);
+            if (r->embree)
+                fprintf(f, ", \"embree_best\": %.6f, \"embree_bvh_build\": %.6f", r->emb_best_s,
+                        r->emb_build_s);
+            fprintf(f, "},\n");
+            fprintf(f, "     \"ratios\": {\"fused_over_embree\": ");
+            if (r->embree)
+                fprintf(f, "%.4f", r->emb_best_s / r->fused_s);
+            else
+                fprintf(f, "null");
+            fprintf(f,
+                    ", \"stream_over_fused\": %.4f, \"fused_over_c\": %.4f, "
+                    "\"embree_best_is\": ",
+                    r->fused_s / r->stream_s, r->c_s / r->fused_s);
+            if (r->embree)
+                fprintf(f, "\"%s, %u thread%s\"", r->emb_best_name, r->emb_best_threads,
+                        r->emb_best_threads > 1 ? "s" : "");
+            else
+                fprintf(f, "null");
+            fprintf(f, "},\n");
+            fprintf(f,
+                    "     \"hit_agreement\": {\"fused_vs_stream\": %.6f, \"fused_vs_c\": %.6f, "
+                    "\"fused_vs_embree_triangle\": ",
+                    r->agree_stream, r->agree_c);
+            if (r->embree)
+                fprintf(f, "%.6f, \"fused_vs_embree_t\": %.6f}}", r->agree_emb_tri, r->agree_emb_t);
+            else
+                fprintf(f, "null, \"fused_vs_embree_t\": null}}");
+        }
+        fprintf(f, "\n  ],\n");
+        if (skip_purcell) {
+            fprintf(f, "  \"purcell\": null\n}\n");
+        } else {
+            fprintf(f,
+                    "  \"purcell\": {\n    \"setup\": \"ray casting %ux%u, one ray per pixel "
+                    "centre, stream mode (k = m = 1, threshold 0.2)\",\n"
+                    "    \"notes\": \"v voxels and t triangle tests per ray, s hits (shadings) "
+                    "per ray, P traverse + intersect passes (ray generation and shading passes "
+                    "not counted); live_percent: share of the live rays each pass processed; "
+                    "active_percent_est: 100 (v + t) / P, Purcell's share of all rays active "
+                    "per pass (his bunny figures give 9.9%% by this formula for his 10.5%%)\",\n"
+                    "    \"published_bunny\": {\"min_dim\": 64, \"dims\": [98, 64, 163], \"size\": "
+                    "1024, \"v\": 93.93, \"t\": 13.88, \"s\": 0.82, \"P\": 1085, "
+                    "\"max_traversals\": 221, \"max_intersections\": 328, "
+                    "\"active_percent\": 10.5},\n    \"rows\": [",
+                    psize, psize);
+            for (size_t i = 0; i < nprow; ++i) {
+                purcell_row *p = &prow[i];
+                fprintf(f,
+                        "%s\n      {\"scene\": \"%s\", \"min_dim\": %u, \"dims\": [%u, %u, %u], "
+                        "\"v\": %.4f, \"t\": %.4f, \"s\": %.4f, \"P\": %llu, "
+                        "\"traverse_passes\": %llu, \"intersect_passes\": %llu, "
+                        "\"max_traversals\": %u, \"max_intersections\": %u, "
+                        "\"live_percent\": %.3f, \"active_percent_est\": %.3f, "
+                        "\"seconds\": %.4f}",
+                        i ? "," : "", p->scene, p->min_dim, p->dims[0], p->dims[1], p->dims[2],
+                        p->v, p->t, p->s, (unsigned long long)p->passes,
+                        (unsigned long long)p->traverse_passes,
+                        (unsigned long long)p->intersect_passes, p->max_steps, p->max_tests,
+                        p->live_percent, p->active_percent, p->seconds);
+            }
+            fprintf(f, "\n    ]\n  }\n}\n");
+        }
+        fclose(f);
+    }
+    sluice_context_destroy(ctx);
+    return status;
+}
