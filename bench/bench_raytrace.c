@@ -391,6 +391,7 @@ typedef struct scene_result {
     const char *name;
     size_t triangles;
     unsigned w, h;
+    unsigned min_dim; /* the tracer's automatic choice */
     uint32_t dims[3];
     size_t grid_entries;
     double hit_fraction;
@@ -526,9 +527,13 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
 
     /* the grid: plain C build (also the C tracer's) and the device build */
     const sluice_scene_stats *ss = sluice_scene_statistics(sc);
+    /* The tracer's default resolution (rt_grid_auto_min_dim), for all peers
+     * that use a grid. */
+    unsigned min_dim = rt_grid_auto_min_dim(ss->bounds_min, ss->bounds_max, ss->triangles);
+    res->min_dim = min_dim;
     rt_grid_desc desc;
-    if (rt_grid_choose(ss->bounds_min, ss->bounds_max, RT_GRID_DEFAULT_MIN_DIM, &desc, err,
-                       sizeof err) != SLUICE_OK) {
+    if (rt_grid_choose(ss->bounds_min, ss->bounds_max, min_dim, &desc, err, sizeof err) !=
+        SLUICE_OK) {
         fprintf(stderr, PROG ": %s: %s\n", name, err);
         exit(2);
     }
@@ -579,12 +584,10 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     TRY(sluice_stream_create(ctx, sizeof(rt_hit), n, &hits_s));
     TRY(sluice_stream_upload(rays_s, rays, n));
     peer_hits fused = hits_alloc(n), stream = hits_alloc(n), cref = hits_alloc(n);
-    rt_tracer *tf =
-        make_tracer(sc, RT_EXEC_FUSED, RT_GRID_DEFAULT_MIN_DIM, &res->tracer_create_s[0]);
+    rt_tracer *tf = make_tracer(sc, RT_EXEC_FUSED, min_dim, &res->tracer_create_s[0]);
     res->fused_s = time_sluice(tf, rays_s, hits_s, rays, n, reps, &fused);
     rt_tracer_destroy(tf);
-    rt_tracer *ts =
-        make_tracer(sc, RT_EXEC_STREAM, RT_GRID_DEFAULT_MIN_DIM, &res->tracer_create_s[1]);
+    rt_tracer *ts = make_tracer(sc, RT_EXEC_STREAM, min_dim, &res->tracer_create_s[1]);
     res->stream_s = time_sluice(ts, rays_s, hits_s, rays, n, reps, &stream);
     rt_tracer_destroy(ts);
     sluice_stream_destroy(rays_s);
@@ -942,8 +945,9 @@ int main(int argc, char **argv)
                 "  \"setup\": {\"width\": %u, \"height\": %u, \"rays_per_pixel\": 1, \"rays\": "
                 "\"primary, through the pixel centres, the scene's camera, 8x8-tile order\", "
                 "\"reps\": %u, \"timing\": \"best of reps after a warm-up; Sluice: trace only, "
-                "rays and hits in device streams\", \"grid_min_dim\": %u, \"quick\": %s},\n",
-                size, size, reps, RT_GRID_DEFAULT_MIN_DIM, quick ? "true" : "false");
+                "rays and hits in device streams\", \"grid_min_dim\": \"auto "
+                "(rt_grid_auto_min_dim, per scene)\", \"quick\": %s},\n",
+                size, size, reps, quick ? "true" : "false");
 #ifdef HAVE_EMBREE
         fprintf(f,
                 "  \"embree\": {\"available\": true, \"version\": \"%s\", \"build_quality\": "
@@ -966,11 +970,11 @@ int main(int argc, char **argv)
                     first ? "" : ",", r->name, r->triangles, r->hit_fraction);
             first = 0;
             fprintf(f,
-                    "     \"grid\": {\"dims\": [%u, %u, %u], \"entries\": %zu, "
+                    "     \"grid\": {\"min_dim\": %u, \"dims\": [%u, %u, %u], \"entries\": %zu, "
                     "\"build_seconds_c\": %.6f, \"build_seconds_device\": %.6f, "
                     "\"tracer_create_seconds_fused\": %.6f, "
                     "\"tracer_create_seconds_stream\": %.6f},\n",
-                    r->dims[0], r->dims[1], r->dims[2], r->grid_entries, r->grid_host_s,
+                    r->min_dim, r->dims[0], r->dims[1], r->dims[2], r->grid_entries, r->grid_host_s,
                     r->grid_device_s, r->tracer_create_s[0], r->tracer_create_s[1]);
             fprintf(f,
                     "     \"rays_per_second\": {\"sluice_fused\": %.1f, \"sluice_stream\": %.1f, "

@@ -765,6 +765,36 @@ static void test_one_triangle(sluice_context *ctx)
     sluice_scene_destroy(sc);
 }
 
+/* rt_grid_auto_min_dim: about RT_GRID_AUTO_DENSITY voxels per triangle. */
+static void test_auto_min_dim(void)
+{
+    const float lo[3] = {0, 0, 0}, cube[3] = {1, 1, 1}, slab[3] = {4, 2, 0}, box[3] = {2, 1, 4};
+    /* a unit cube, 1000 triangles: 5000 voxels, edge 5000^(-1/3), 17 per axis */
+    unsigned d = rt_grid_auto_min_dim(lo, cube, 1000);
+    CHECK(d == 17, "cube: min dim %u, expected 17", d);
+    /* a box 2 x 1 x 4 and 1000 triangles: edge (8 / 5000)^(1/3), 1 / edge = 8.55 */
+    d = rt_grid_auto_min_dim(lo, box, 1000);
+    CHECK(d == 9, "box: min dim %u, expected 9", d);
+    /* flat (z = 0): an area 4 x 2 cut into about 5000 squares: edge 0.04, 50 */
+    d = rt_grid_auto_min_dim(lo, slab, 1000);
+    CHECK(d == 50, "slab: min dim %u, expected 50", d);
+    /* few triangles: at least one voxel */
+    d = rt_grid_auto_min_dim(lo, cube, 1);
+    CHECK(d == 2, "one triangle: min dim %u, expected 2", d);
+    /* many: capped at RT_GRID_AUTO_MAX_CELLS, and the grid is valid */
+    d = rt_grid_auto_min_dim(lo, box, (size_t)1 << 30);
+    rt_grid_desc desc;
+    char err[256];
+    CHECK(rt_grid_choose(lo, box, d, &desc, err, sizeof err) == SLUICE_OK, "capped: %s", err);
+    CHECK((double)desc.dims[0] * desc.dims[1] * desc.dims[2] <= (double)RT_GRID_AUTO_MAX_CELLS,
+          "capped: %u x %u x %u voxels", desc.dims[0], desc.dims[1], desc.dims[2]);
+    /* a point, bad bounds, no triangles */
+    CHECK(rt_grid_auto_min_dim(lo, lo, 100) == 1, "point");
+    const float bad[3] = {1, NAN, 1};
+    CHECK(rt_grid_auto_min_dim(lo, bad, 100) == RT_GRID_DEFAULT_MIN_DIM, "NaN bounds");
+    CHECK(rt_grid_auto_min_dim(lo, cube, 0) == RT_GRID_DEFAULT_MIN_DIM, "no triangles");
+}
+
 int main(int argc, char **argv)
 {
     /* --scene NAME: one scene only, timed (measurements by hand; with
@@ -778,6 +808,7 @@ int main(int argc, char **argv)
         return check_summary();
     }
     test_choose();
+    test_auto_min_dim();
     test_host_known();
     sluice_context *ctx = check_context(0);
     test_soups(ctx);

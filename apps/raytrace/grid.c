@@ -106,6 +106,51 @@ sluice_status rt_grid_choose(const float lo[3], const float hi[3], unsigned min_
     return SLUICE_OK;
 }
 
+unsigned rt_grid_auto_min_dim(const float lo[3], const float hi[3], size_t triangles)
+{
+    if (!lo || !hi || triangles == 0)
+        return RT_GRID_DEFAULT_MIN_DIM;
+    double ext[3], max_ext = 0.0;
+    for (int a = 0; a < 3; ++a) {
+        if (!isfinite(lo[a]) || !isfinite(hi[a]) || lo[a] > hi[a])
+            return RT_GRID_DEFAULT_MIN_DIM;
+        ext[a] = (double)hi[a] - (double)lo[a];
+        max_ext = fmax(max_ext, ext[a]);
+    }
+    /* the measure of the box over its non-flat axes, as rt_grid_choose sees
+     * them, and the shortest of those axes */
+    double measure = 1.0, shortest = 0.0;
+    int axes = 0;
+    for (int a = 0; a < 3; ++a) {
+        if (ext[a] > max_ext * RT_GRID_FLAT_RATIO) {
+            measure *= ext[a];
+            shortest = axes == 0 ? ext[a] : fmin(shortest, ext[a]);
+            ++axes;
+        }
+    }
+    if (axes == 0)
+        return 1;
+    double cells = RT_GRID_AUTO_DENSITY * (double)triangles;
+    if (cells > (double)RT_GRID_AUTO_MAX_CELLS)
+        cells = (double)RT_GRID_AUTO_MAX_CELLS;
+    /* voxels of edge e: measure / e^axes = cells */
+    double edge = pow(measure / cells, 1.0 / (double)axes);
+    double d = edge > 0.0 ? floor(shortest / edge + 0.5) : 1.0;
+    if (!(d >= 1.0))
+        d = 1.0;
+    /* rounding up the other axes may overshoot: step down until it fits */
+    while (d > 1.0) {
+        double n = 1.0;
+        for (int a = 0; a < 3; ++a)
+            if (ext[a] > max_ext * RT_GRID_FLAT_RATIO)
+                n *= ceil(ext[a] / shortest * d);
+        if (n <= (double)RT_GRID_AUTO_MAX_CELLS && d <= 1024.0)
+            break;
+        d = floor(d * 0.9);
+    }
+    return (unsigned)d;
+}
+
 sluice_status rt_grid_desc_check(const rt_grid_desc *desc, size_t *cells, char *err,
                                  size_t err_size)
 {

@@ -37,7 +37,8 @@ static void usage(FILE *out)
         "  --seed N                 random seed (default 1); same seed, same image\n"
         "  --out FILE               .png or .exr (default out.png)\n"
         "  --stats FILE             write the statistics as JSON\n"
-        "  --grid-min-dim N         voxels along the shortest axis (default %u)\n"
+        "  --grid-min-dim N|auto    voxels along the shortest axis, 1 .. 1024 (default auto:\n"
+        "                           about %g voxels per triangle)\n"
         "  --grid-build B           device | host (default device)\n"
         "  --intersect-threshold F  stream mode: intersect when >= F of live rays need it\n"
         "                           (default 0.2)\n"
@@ -56,7 +57,7 @@ static void usage(FILE *out)
         "  " PROG " --scene bunny --mode cast --exec fused --stats bunny.json\n"
         "  " PROG " --scene glassball --mode whitted --max-depth 8 --out glass.exr\n"
         "  " PROG " --scene cornell --mode path --spp 64 --progress --checkpoint 16\n",
-        RT_GRID_DEFAULT_MIN_DIM);
+        RT_GRID_AUTO_DENSITY);
 }
 
 static int bad(const char *opt, const char *value, const char *why)
@@ -199,8 +200,10 @@ static int parse(int argc, char **argv, cli *c)
             if (!parse_uint(v, 1, 1u << 20, &c->checkpoint))
                 return bad(a, v, "expected a whole number from 1 to 1048576");
         } else if (!strcmp(a, "--grid-min-dim")) {
-            if (!parse_uint(v, 1, 1024, &u))
-                return bad(a, v, "expected a whole number from 1 to 1024");
+            if (!strcmp(v, "auto"))
+                u = RT_GRID_AUTO_MIN_DIM;
+            else if (!parse_uint(v, 1, 1024, &u))
+                return bad(a, v, "expected auto or a whole number from 1 to 1024");
             c->topt.grid_min_dim = u;
         } else if (!strcmp(a, "--unroll-steps")) {
             if (!parse_uint(v, 1, 4096, &u))

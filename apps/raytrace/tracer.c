@@ -17,7 +17,7 @@ rt_tracer_options rt_tracer_options_default(void)
     o.exec = RT_EXEC_STREAM;
     o.intersector = RT_ISECT_MT;
     o.grid_build = RT_GRID_BUILD_DEVICE;
-    o.grid_min_dim = RT_GRID_DEFAULT_MIN_DIM;
+    o.grid_min_dim = RT_GRID_AUTO_MIN_DIM;
     o.intersect_threshold = 0.2f;
     o.unroll_steps = 1;
     o.unroll_tests = 1;
@@ -136,11 +136,14 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
 {
     const sluice_scene_stats *ss = sluice_scene_statistics(t->scene);
     rt_grid_desc desc;
+    size_t nt = sluice_scene_triangle_count(t->scene);
+    unsigned min_dim = t->opt.grid_min_dim;
+    if (min_dim == RT_GRID_AUTO_MIN_DIM)
+        min_dim = rt_grid_auto_min_dim(ss->bounds_min, ss->bounds_max, nt);
     sluice_status st =
-        rt_grid_choose(ss->bounds_min, ss->bounds_max, t->opt.grid_min_dim, &desc, err, err_size);
+        rt_grid_choose(ss->bounds_min, ss->bounds_max, min_dim, &desc, err, err_size);
     if (st != SLUICE_OK)
         return st;
-    size_t nt = sluice_scene_triangle_count(t->scene);
     if (t->opt.grid_build == RT_GRID_BUILD_DEVICE) {
         st = rt_grid_build_device(t->ctx, &desc, t->positions, t->indices, nt, &t->grid);
         if (st != SLUICE_OK)
@@ -246,9 +249,8 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     rt_tracer_options o = opt ? *opt : rt_tracer_options_default();
-    if (o.grid_min_dim == 0 || o.unroll_steps == 0 || o.unroll_tests == 0 ||
-        o.unroll_steps > 4096 || o.unroll_tests > 4096 || !(o.intersect_threshold >= 0.0f) ||
-        o.intersect_threshold > 1.0f) {
+    if (o.unroll_steps == 0 || o.unroll_tests == 0 || o.unroll_steps > 4096 ||
+        o.unroll_tests > 4096 || !(o.intersect_threshold >= 0.0f) || o.intersect_threshold > 1.0f) {
         fail(err, err_size,
              "rt_tracer_create: bad options (min dim %u, unroll %u/%u, threshold %g)",
              o.grid_min_dim, o.unroll_steps, o.unroll_tests, (double)o.intersect_threshold);

@@ -52,7 +52,8 @@ typedef struct rt_tracer_options {
     rt_exec exec;
     rt_intersector intersector;
     rt_grid_build grid_build;
-    unsigned grid_min_dim;     /**< voxels along the shortest axis (Purcell 5.2.1) */
+    unsigned grid_min_dim;     /**< voxels along the shortest axis (Purcell 5.2.1);
+                                    RT_GRID_AUTO_MIN_DIM (0): rt_grid_auto_min_dim */
     float intersect_threshold; /**< stream mode: intersect when I >= this * live */
     unsigned unroll_steps;     /**< stream mode: voxels per traverse pass (k) */
     unsigned unroll_tests;     /**< stream mode: triangle tests per intersect pass (m) */
@@ -62,7 +63,7 @@ typedef struct rt_tracer_options {
     unsigned render_mode;
 } rt_tracer_options;
 
-/** Defaults: stream, Moller-Trumbore, device grid, RT_GRID_DEFAULT_MIN_DIM,
+/** Defaults: stream, Moller-Trumbore, device grid, RT_GRID_AUTO_MIN_DIM,
  *  threshold 0.2 (Purcell 4.1.2), k = m = 1, unordered, RT_MODE_SHADOW. */
 rt_tracer_options rt_tracer_options_default(void);
 

@@ -173,6 +173,12 @@ inline float rt_voxel_limit(float t_exit, float tmax)
     return fmin(t_exit + fabs(t_exit) * 1e-6f, tmax);
 }
 
+/* rt_voxel_limit in 16 lanes (the fused mode's packets). */
+inline float16 rt_voxel_limit16(float16 t_exit, float16 tmax)
+{
+    return fmin(t_exit + fabs(t_exit) * 1e-6f, tmax);
+}
+
 /* ------------------------------------------------------------------ */
 /* Ray-triangle intersection                                           */
 /* ------------------------------------------------------------------ */
