@@ -463,11 +463,15 @@ static sluice_scene *load_scene(const char *name)
 }
 
 static rt_tracer *make_tracer(const sluice_scene *sc, rt_exec exec, unsigned min_dim,
-                              double *seconds)
+                              unsigned unroll, double *seconds)
 {
     char err[512];
     rt_tracer_options o = rt_tracer_options_default();
     o.exec = exec;
+    if (unroll) {
+        o.unroll_steps = unroll;
+        o.unroll_tests = unroll;
+    }
     o.grid_min_dim = min_dim;
     o.render_mode = RT_MODE_CAST;
     rt_tracer *t = NULL;
@@ -584,10 +588,10 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     TRY(sluice_stream_create(ctx, sizeof(rt_hit), n, &hits_s));
     TRY(sluice_stream_upload(rays_s, rays, n));
     peer_hits fused = hits_alloc(n), stream = hits_alloc(n), cref = hits_alloc(n);
-    rt_tracer *tf = make_tracer(sc, RT_EXEC_FUSED, min_dim, &res->tracer_create_s[0]);
+    rt_tracer *tf = make_tracer(sc, RT_EXEC_FUSED, min_dim, 0, &res->tracer_create_s[0]);
     res->fused_s = time_sluice(tf, rays_s, hits_s, rays, n, reps, &fused);
     rt_tracer_destroy(tf);
-    rt_tracer *ts = make_tracer(sc, RT_EXEC_STREAM, min_dim, &res->tracer_create_s[1]);
+    rt_tracer *ts = make_tracer(sc, RT_EXEC_STREAM, min_dim, 0, &res->tracer_create_s[1]);
     res->stream_s = time_sluice(ts, rays_s, hits_s, rays, n, reps, &stream);
     rt_tracer_destroy(ts);
     sluice_stream_destroy(rays_s);
@@ -712,7 +716,7 @@ static int purcell_run(const char *name, unsigned size, unsigned min_dim, purcel
     size_t n = (size_t)size * size;
     rt_ray *rays = eye_rays(sc, size, size);
     rt_hit *hits = xmalloc(n * sizeof *hits);
-    rt_tracer *t = make_tracer(sc, RT_EXEC_STREAM, min_dim, NULL);
+    rt_tracer *t = make_tracer(sc, RT_EXEC_STREAM, min_dim, 1, NULL); /* Purcell's k = m = 1 */
     rt_tracer_reset_stats(t);
     double t0 = now();
     TRY(rt_tracer_trace(t, rays, n, hits));
@@ -900,7 +904,8 @@ int main(int argc, char **argv)
     purcell_row prow[6];
     size_t nprow = 0;
     if (!skip_purcell) {
-        printf("\nPurcell's statistics (Fig. 5.2, Table 5.2): ray casting %ux%u, stream mode\n",
+        printf("\nPurcell's statistics (Fig. 5.2, Table 5.2): ray casting %ux%u, stream mode, k = "
+               "m = 1\n",
                psize, psize);
         printf("%-14s %4s %12s %8s %8s %6s %6s %8s %8s %7s %9s %8s\n", "scene", "min", "grid", "v",
                "t", "s", "P", "max trv", "max isc", "live%", "active%", "seconds");

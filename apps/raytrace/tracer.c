@@ -19,8 +19,8 @@ rt_tracer_options rt_tracer_options_default(void)
     o.grid_build = RT_GRID_BUILD_DEVICE;
     o.grid_min_dim = RT_GRID_AUTO_MIN_DIM;
     o.intersect_threshold = 0.2f;
-    o.unroll_steps = 1;
-    o.unroll_tests = 1;
+    o.unroll_steps = 16;
+    o.unroll_tests = 16;
     o.ordered = 0;
     o.render_mode = RT_MODE_SHADOW;
     return o;
@@ -232,6 +232,8 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     if (st == SLUICE_OK)
         st = sluice_kernel_create(t->program, "rt_route", &t->k_route_i);
     if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_route_setup", &t->k_route_setup);
+    if (st == SLUICE_OK)
         st = sluice_kernel_create(t->program, "rt_trace_fused", &t->k_fused);
     if (st != SLUICE_OK)
         fail(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
@@ -302,6 +304,7 @@ void rt_tracer_destroy(rt_tracer *t)
     sluice_kernel_destroy(t->k_intersect);
     sluice_kernel_destroy(t->k_route_t);
     sluice_kernel_destroy(t->k_route_i);
+    sluice_kernel_destroy(t->k_route_setup);
     sluice_kernel_destroy(t->k_fused);
     sluice_program_destroy(t->program);
     sluice_counters_destroy(t->counters);
@@ -409,7 +412,7 @@ size_t rt_tracer_scene_bytes(const rt_tracer *t)
 
 size_t rt_tracer_stream_bytes(const rt_tracer *t)
 {
-    return t ? t->state_capacity * 5 * sizeof(rt_state) : 0;
+    return t ? t->state_capacity * (5 * sizeof(uint32_t) + sizeof(rt_walk)) : 0;
 }
 
 const rt_tracer_options *rt_tracer_get_options(const rt_tracer *t)

@@ -30,13 +30,15 @@ struct rt_tracer {
     size_t scene_bytes;
 
     sluice_program *program;
-    sluice_kernel *k_setup, *k_traverse, *k_intersect, *k_route_t, *k_route_i, *k_fused;
+    sluice_kernel *k_setup, *k_traverse, *k_intersect, *k_route_t, *k_route_i, *k_route_setup,
+        *k_fused;
     sluice_counters *counters; /* RT_CTR_* */
     sluice_stream *maxima;     /* uint x2: largest per-ray steps and tests */
 
-    /* stream mode: the traverse and intersect streams (ping-pong pairs) and
-     * the mapped output of the heavy kernels */
-    sluice_stream *trav_in, *trav_out, *isect_in, *isect_out, *scratch;
+    /* stream mode: the traverse and intersect streams of ray ids (ping-pong
+     * pairs), the codes the heavy kernels write (a mapped output) and the
+     * per-ray walk state (rt_walk, indexed by ray) */
+    sluice_stream *trav_in, *trav_out, *isect_in, *isect_out, *codes, *walk;
     size_t state_capacity;
     sluice_loop *loop;
     sluice_stream *watched[2]; /* what the loop watches: trav_in, isect_in */

@@ -1,14 +1,22 @@
 /*
  * rt_stream.cl: the `stream` execution mode, Purcell's multipass ray tracer
  * (thesis ch. 3.1 and 4.1.2): traversal setup, a traverse kernel and an
- * intersect kernel, each of which moves every ray on by a bounded amount of
- * work, and a route kernel that sorts the rays into the "traverse" and
- * "intersect" streams with conditional outputs. Rays that are done (a hit,
- * or out of the grid) write their hit record, indexed by ray, for the shader.
+ * intersect kernel, each of which moves every ray of its stream on by a
+ * bounded amount of work, and a route kernel that sorts the rays into the
+ * "traverse" and "intersect" streams with conditional outputs.
  *
- * The heavy kernels (traverse, intersect) write a mapped output and emit
- * nothing, so their bodies run once; the route kernel is the cheap one that
- * emits (README.md "Writing a kernel": a body that emits runs twice).
+ * The streams carry 4-byte ray ids. What a ray has done so far lives in
+ * buffers indexed by ray, as Purcell keeps it in textures: its voxel and list
+ * position (rt_walk) and its best hit and work counts (its rt_hit record,
+ * which is also what the shader reads when the ray is done). A pass touches
+ * each ray of its stream from exactly one work-item, so the state is updated
+ * in place without races.
+ *
+ * The heavy kernels (setup, traverse, intersect) emit nothing: they write the
+ * ray's next stream as a code in a mapped output aligned with their input
+ * (RT_NEXT_*), so their bodies run once. The route kernels are the cheap ones
+ * that emit (README.md "Writing a kernel": a body that emits runs twice),
+ * 16 ids at a time with SLUICE_EMIT16.
  *
  * Build options: RT_UNROLL_STEPS (k, voxels per traverse pass) and
  * RT_UNROLL_TESTS (m, triangles per intersect pass), Purcell 5.2.2.
@@ -21,143 +29,572 @@
 #define RT_UNROLL_TESTS 1
 #endif
 
-inline void rt_state_best(const rt_state *s, rt_best *b)
+#pragma OPENCL FP_CONTRACT OFF
+
+/* 16 rays in lanes, for the kernels' blocks of 16 records: the same fields
+ * and the same arithmetic as rt_prepare (rt_trace.cl), lane by lane, so a
+ * ray's voxels do not depend on which path handled it. */
+typedef struct rt_ray16 {
+    float16 ox, oy, oz, dx, dy, dz;
+    float16 ix, iy, iz; /* 1 / d; 0 where d is 0 */
+    float16 tmin, tmax;
+    int16 any_hit; /* -1 where RT_FLAG_ANY_HIT */
+} rt_ray16;
+
+inline void rt_ray16_load(global const rt_ray *rays, uint16 idv, rt_ray16 *r)
 {
-    b->tri = s->best_tri;
-    b->t = s->best_t;
-    b->u = s->best_u;
-    b->v = s->best_v;
+    uint id[16];
+    float f[8][16];
+    uint fl[16];
+    vstore16(idv, 0, id);
+    for (uint l = 0; l < 16u; ++l) {
+        global const rt_ray *p = &rays[id[l]];
+        f[0][l] = p->ox;
+        f[1][l] = p->oy;
+        f[2][l] = p->oz;
+        f[3][l] = p->dx;
+        f[4][l] = p->dy;
+        f[5][l] = p->dz;
+        f[6][l] = p->tmin;
+        f[7][l] = p->tmax;
+        fl[l] = p->flags;
+    }
+    r->any_hit = as_int16((vload16(0, fl) & (uint16)RT_FLAG_ANY_HIT) != (uint16)0u);
+    r->ox = vload16(0, f[0]);
+    r->oy = vload16(0, f[1]);
+    r->oz = vload16(0, f[2]);
+    r->dx = vload16(0, f[3]);
+    r->dy = vload16(0, f[4]);
+    r->dz = vload16(0, f[5]);
+    r->tmin = vload16(0, f[6]);
+    r->tmax = vload16(0, f[7]);
+    r->ix = select((float16)0.0f, 1.0f / r->dx, r->dx != 0.0f);
+    r->iy = select((float16)0.0f, 1.0f / r->dy, r->dy != 0.0f);
+    r->iz = select((float16)0.0f, 1.0f / r->dz, r->dz != 0.0f);
 }
 
-/* Eye-ray (or any ray) setup: clip to the grid; rays that miss its box are
- * done at once, the others enter the traverse stream at their first voxel. */
-__kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global rt_state *trav,
-                       global rt_hit *hits, global uint *maxima, const rt_grid_args g)
+/* p[idx] in the lanes of m (others 0). Branch-free: the other lanes read
+ * p[0], so the loop is plain loads the compiler may turn into a gather. */
+inline uint16 rt_gather16(global const uint *p, uint16 idx, int16 m)
 {
-    SLUICE_FOR_EACH (i) {
-        rt_rayp r = rt_prepare(&rays[i]);
-        int3 c = (int3)(0, 0, 0);
-        int in = rt_grid_enter(&g, &r, &c);
-        if (!in && SLUICE_WRITING) {
-            rt_best b = rt_no_hit(&r);
-            rt_finish_hit(hits, i, &b, 0u, 0u, maxima);
+    uint a[16], out[16];
+    vstore16(select((uint16)0u, idx, as_uint16(m)), 0, a);
+    for (uint l = 0; l < 16u; ++l)
+        out[l] = p[a[l]];
+    return select((uint16)0u, vload16(0, out), as_uint16(m));
+}
+
+/* rt_voxel_exit in 16 lanes: the exit parameter and the axis (0, 1, 2). */
+inline float16 rt_voxel_exit16(const rt_grid_args *g, const rt_ray16 *r, int16 cx, int16 cy,
+                               int16 cz, int16 *axis)
+{
+    float16 bx =
+        g->lo[0] + convert_float16(cx + select((int16)0, (int16)1, r->dx > 0.0f)) * g->cell[0];
+    float16 by =
+        g->lo[1] + convert_float16(cy + select((int16)0, (int16)1, r->dy > 0.0f)) * g->cell[1];
+    float16 bz =
+        g->lo[2] + convert_float16(cz + select((int16)0, (int16)1, r->dz > 0.0f)) * g->cell[2];
+    float16 tx = select((float16)INFINITY, (bx - r->ox) * r->ix, r->dx != 0.0f);
+    float16 ty = select((float16)INFINITY, (by - r->oy) * r->iy, r->dy != 0.0f);
+    float16 tz = select((float16)INFINITY, (bz - r->oz) * r->iz, r->dz != 0.0f);
+    int16 a = (int16)0;
+    float16 t = tx;
+    int16 y = ty < t;
+    t = select(t, ty, y);
+    a = select(a, (int16)1, y);
+    int16 z = tz < t;
+    t = select(t, tz, z);
+    a = select(a, (int16)2, z);
+    *axis = a;
+    return t;
+}
+
+/* A ray is done: keep the largest per-ray step and test counts (read first,
+ * so the atomic is rare). Its hit record is already in place. */
+inline void rt_stream_maxima(global uint *maxima, uint steps, uint tests)
+{
+    if (steps > maxima[0])
+        atomic_max(&maxima[0], steps);
+    if (tests > maxima[1])
+        atomic_max(&maxima[1], tests);
+}
+
+/* One ray of rt_setup (the records after the last block of 16). Returns
+ * whether it enters the grid. */
+inline int rt_setup_one(const rt_grid_args *g, global const rt_ray *rays, global uint *codes,
+                        global rt_walk *walk, global rt_hit *hits, uint i)
+{
+    rt_rayp r = rt_prepare(&rays[i]);
+    int3 c = (int3)(0, 0, 0);
+    int in = rt_grid_enter(g, &r, &c);
+    rt_hit h;
+    h.tri = RT_NO_HIT;
+    h.t = r.tmax;
+    h.u = 0.0f;
+    h.v = 0.0f;
+    h.steps = 0u;
+    h.tests = 0u;
+    hits[i] = h;
+    rt_walk w;
+    w.cx = c.x;
+    w.cy = c.y;
+    w.cz = c.z;
+    w.pos = 0u;
+    walk[i] = w;
+    codes[i] = in ? RT_NEXT_TRAVERSE : RT_NEXT_DONE;
+    return in;
+}
+
+/* Eye-ray (or any ray) setup: clip to the grid. Every ray's hit record starts
+ * as a miss with no work done (rays that miss the grid's box are done at
+ * once); the others start at their first voxel and go to traversal. */
+__kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *codes,
+                       global rt_walk *walk, global rt_hit *hits, const rt_grid_args g)
+{
+    SLUICE_FOR_EACH_RANGE(lo, hi)
+    {
+        const uint16 lane =
+            (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+        uint i = lo;
+        for (; i + 16u <= hi; i += 16u) {
+            rt_ray16 r;
+            rt_ray16_load(rays, (uint16)i + lane, &r);
+            /* rt_grid_enter, lane by lane */
+            float16 t0 = r.tmin, t1 = r.tmax;
+            int16 miss = (int16)0;
+            float16 o[3] = {r.ox, r.oy, r.oz}, d[3] = {r.dx, r.dy, r.dz};
+            float16 inv[3] = {r.ix, r.iy, r.iz};
+            for (int k = 0; k < 3; ++k) {
+                int16 par = d[k] == 0.0f;
+                miss |= par & ((o[k] < g.lo[k]) | (o[k] > g.hi[k]));
+                float16 ta = (g.lo[k] - o[k]) * inv[k], tb = (g.hi[k] - o[k]) * inv[k];
+                t0 = select(fmax(t0, fmin(ta, tb)), t0, par);
+                t1 = select(fmin(t1, fmax(ta, tb)), t1, par);
+            }
+            int16 in = ~miss & (t0 <= t1);
+            int c[3][16];
+            for (int k = 0; k < 3; ++k) {
+                float16 p = o[k] + d[k] * t0;
+                int16 v = convert_int16(floor((p - g.lo[k]) * g.inv_cell[k]));
+                vstore16(clamp(v, (int16)0, (int16)(g.dims[k] - 1)), 0, c[k]);
+            }
+            float tm[16];
+            vstore16(r.tmax, 0, tm);
+            for (uint l = 0; l < 16u; ++l) {
+                rt_hit h;
+                h.tri = RT_NO_HIT;
+                h.t = tm[l];
+                h.u = 0.0f;
+                h.v = 0.0f;
+                h.steps = 0u;
+                h.tests = 0u;
+                hits[i + l] = h;
+                rt_walk w;
+                w.cx = c[0][l];
+                w.cy = c[1][l];
+                w.cz = c[2][l];
+                w.pos = 0u;
+                walk[i + l] = w;
+            }
+            vstore16(select((uint16)RT_NEXT_DONE, (uint16)RT_NEXT_TRAVERSE, as_uint16(in)), 0,
+                     codes + i);
+            SLUICE_COUNT(2, (uint)popcount((uint)sluice_mask16(~in)));
         }
-        rt_state s;
-        s.ray = i;
-        s.cx = c.x;
-        s.cy = c.y;
-        s.cz = c.z;
-        s.pos = 0u;
-        s.best_tri = RT_NO_HIT;
-        s.best_t = r.tmax;
-        s.best_u = 0.0f;
-        s.best_v = 0.0f;
-        s.steps = 0u;
-        s.tests = 0u;
-        s.next = RT_NEXT_TRAVERSE;
-        SLUICE_EMIT_IF(0, trav, s, in);
-        SLUICE_COUNT(2, !in);
+        for (; i < hi; ++i) {
+            int in = rt_setup_one(&g, rays, codes, walk, hits, i);
+            SLUICE_COUNT(2, !in);
+        }
     }
+}
+
+/* One ray of rt_traverse (the records after the last block of 16): up to
+ * RT_UNROLL_STEPS voxels. Returns the ray's next stream; adds the voxels
+ * visited to *visited. */
+inline uint rt_traverse_one(const rt_grid_args *g, global const rt_ray *rays, global rt_walk *walk,
+                            global rt_hit *hits, global uint *maxima, global const uint *cell_start,
+                            uint id, uint *visited_out)
+{
+    rt_rayp r = rt_prepare(&rays[id]);
+    rt_walk w = walk[id];
+    int3 c = (int3)(w.cx, w.cy, w.cz);
+    uint visited = 0u, next = RT_NEXT_TRAVERSE;
+    for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
+        ++visited;
+        uint ci = rt_cell_index(g, c);
+        uint a = cell_start[ci], b = cell_start[ci + 1u];
+        if (a < b) {
+            w.pos = a;
+            next = RT_NEXT_INTERSECT;
+            break;
+        }
+        int axis;
+        float te = rt_voxel_exit(g, &r, c, &axis);
+        if (te >= r.tmax || !rt_voxel_step(g, &r, &c, axis)) {
+            next = RT_NEXT_DONE;
+            break;
+        }
+    }
+    global rt_hit *h = &hits[id];
+    uint steps = h->steps + visited;
+    h->steps = steps;
+    if (next == RT_NEXT_DONE) {
+        rt_stream_maxima(maxima, steps, h->tests);
+    } else {
+        w.cx = c.x;
+        w.cy = c.y;
+        w.cz = c.z;
+        walk[id] = w;
+    }
+    *visited_out += visited;
+    return next;
 }
 
 /* Up to RT_UNROLL_STEPS voxels: a non-empty voxel sends the ray to the
  * intersector (empty voxels never reach it); leaving the grid, or passing
- * the ray's end, finishes it as a miss. */
-__kernel void rt_traverse(SLUICE_PARAMS, global const rt_state *in, global rt_state *out,
-                          global const rt_ray *rays, global rt_hit *hits, global uint *maxima,
-                          global const uint *cell_start, const rt_grid_args g)
+ * the ray's end, finishes it as a miss. Blocks of 16 rays run in lanes. */
+__kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *codes,
+                          global rt_walk *walk, global const rt_ray *rays, global rt_hit *hits,
+                          global uint *maxima, global const uint *cell_start, const rt_grid_args g)
 {
-    SLUICE_FOR_EACH (i) {
-        rt_state s = in[i];
-        rt_rayp r = rt_prepare(&rays[s.ray]);
-        int3 c = (int3)(s.cx, s.cy, s.cz);
-        uint visited = 0u;
-        s.next = RT_NEXT_TRAVERSE;
-        for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
-            ++visited;
-            uint ci = rt_cell_index(&g, c);
-            uint a = cell_start[ci], b = cell_start[ci + 1u];
-            if (a < b) {
-                s.pos = a;
-                s.next = RT_NEXT_INTERSECT;
-                break;
+    SLUICE_FOR_EACH_RANGE(lo, hi)
+    {
+        uint i = lo, visited_all = 0u, done_all = 0u;
+        for (; i + 16u <= hi; i += 16u) {
+            uint16 idv = vload16(0, ids + i);
+            rt_ray16 r;
+            rt_ray16_load(rays, idv, &r);
+            uint id[16];
+            vstore16(idv, 0, id);
+            int wc[4][16];
+            for (uint l = 0; l < 16u; ++l) {
+                rt_walk w = walk[id[l]];
+                wc[0][l] = w.cx;
+                wc[1][l] = w.cy;
+                wc[2][l] = w.cz;
+                wc[3][l] = (int)w.pos;
             }
-            int axis;
-            float te = rt_voxel_exit(&g, &r, c, &axis);
-            if (te >= r.tmax || !rt_voxel_step(&g, &r, &c, axis)) {
-                s.next = RT_NEXT_DONE;
-                break;
+            int16 cx = vload16(0, wc[0]), cy = vload16(0, wc[1]), cz = vload16(0, wc[2]);
+            uint16 pos = as_uint16(vload16(0, wc[3]));
+            int16 active = (int16)-1, done = (int16)0, found = (int16)0;
+            uint16 visited = (uint16)0u;
+            for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
+                if (!any(active))
+                    break;
+                visited += as_uint16(active) & (uint16)1u;
+                uint16 ci = as_uint16(cx) +
+                            (uint)g.dims[0] * (as_uint16(cy) + (uint)g.dims[1] * as_uint16(cz));
+                uint16 a = rt_gather16(cell_start, ci, active);
+                uint16 b = rt_gather16(cell_start, ci + 1u, active);
+                int16 f = active & as_int16(a < b);
+                pos = select(pos, a, as_uint16(f));
+                found |= f;
+                active &= ~f;
+                int16 axis;
+                float16 te = rt_voxel_exit16(&g, &r, cx, cy, cz, &axis);
+                int16 leave = active & (te >= r.tmax);
+                int16 go = active & ~leave;
+                int16 sx = go & (axis == 0), sy = go & (axis == 1), sz = go & (axis == 2);
+                cx += select((int16)0, select((int16)-1, (int16)1, r.dx > 0.0f), sx);
+                cy += select((int16)0, select((int16)-1, (int16)1, r.dy > 0.0f), sy);
+                cz += select((int16)0, select((int16)-1, (int16)1, r.dz > 0.0f), sz);
+                int16 out = (sx & ((cx < 0) | (cx >= g.dims[0]))) |
+                            (sy & ((cy < 0) | (cy >= g.dims[1]))) |
+                            (sz & ((cz < 0) | (cz >= g.dims[2])));
+                done |= leave | out;
+                active &= ~(leave | out);
             }
+            uint16 next = select(
+                select((uint16)RT_NEXT_TRAVERSE, (uint16)RT_NEXT_INTERSECT, as_uint16(found)),
+                (uint16)RT_NEXT_DONE, as_uint16(done));
+            vstore16(next, 0, codes + i);
+            uint vs[16], nx[16];
+            vstore16(visited, 0, vs);
+            vstore16(next, 0, nx);
+            vstore16(cx, 0, wc[0]);
+            vstore16(cy, 0, wc[1]);
+            vstore16(cz, 0, wc[2]);
+            vstore16(as_int16(pos), 0, wc[3]);
+            for (uint l = 0; l < 16u; ++l) {
+                global rt_hit *h = &hits[id[l]];
+                uint steps = h->steps + vs[l];
+                h->steps = steps;
+                if (nx[l] == RT_NEXT_DONE) {
+                    rt_stream_maxima(maxima, steps, h->tests);
+                } else {
+                    rt_walk w;
+                    w.cx = wc[0][l];
+                    w.cy = wc[1][l];
+                    w.cz = wc[2][l];
+                    w.pos = (uint)wc[3][l];
+                    walk[id[l]] = w;
+                }
+            }
+            visited_all += vs[0] + vs[1] + vs[2] + vs[3] + vs[4] + vs[5] + vs[6] + vs[7] + vs[8] +
+                           vs[9] + vs[10] + vs[11] + vs[12] + vs[13] + vs[14] + vs[15];
+            done_all += (uint)popcount((uint)sluice_mask16(done));
         }
-        s.steps += visited;
-        s.cx = c.x;
-        s.cy = c.y;
-        s.cz = c.z;
-        if (s.next == RT_NEXT_DONE) {
-            rt_best b;
-            rt_state_best(&s, &b);
-            rt_finish_hit(hits, s.ray, &b, s.steps, s.tests, maxima);
+        for (; i < hi; ++i) {
+            uint next =
+                rt_traverse_one(&g, rays, walk, hits, maxima, cell_start, ids[i], &visited_all);
+            codes[i] = next;
+            done_all += next == RT_NEXT_DONE;
         }
-        out[i] = s;
-        SLUICE_COUNT(0, visited);
-        SLUICE_COUNT(2, s.next == RT_NEXT_DONE);
+        SLUICE_COUNT(0, visited_all);
+        SLUICE_COUNT(2, done_all);
     }
+}
+
+#ifndef RT_WATERTIGHT
+/* rt_intersect_tri (Moller-Trumbore) in the lanes of m: triangle tri[l]
+ * against ray l, the same operations in the same order, so a lane finds
+ * exactly what the scalar test finds. */
+inline void rt_intersect_tri16(global const float *tv, uint16 triv, int16 m, const rt_ray16 *r,
+                               float16 limit, uint16 *btri, float16 *bt, float16 *bu, float16 *bv)
+{
+    uint at[16];
+    float f[9][16];
+    vstore16(select((uint16)0u, triv, as_uint16(m)) * 9u, 0, at);
+    for (uint k = 0; k < 9u; ++k)
+        for (uint l = 0; l < 16u; ++l)
+            f[k][l] = tv[at[l] + k];
+    float16 v0x = vload16(0, f[0]), v0y = vload16(0, f[1]), v0z = vload16(0, f[2]);
+    float16 e1x = vload16(0, f[3]) - v0x, e1y = vload16(0, f[4]) - v0y,
+            e1z = vload16(0, f[5]) - v0z;
+    float16 e2x = vload16(0, f[6]) - v0x, e2y = vload16(0, f[7]) - v0y,
+            e2z = vload16(0, f[8]) - v0z;
+    float16 pvx = r->dy * e2z - r->dz * e2y;
+    float16 pvy = r->dz * e2x - r->dx * e2z;
+    float16 pvz = r->dx * e2y - r->dy * e2x;
+    float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
+    int16 ok = m & (det != 0.0f);
+    float16 inv = 1.0f / det;
+    float16 sx = r->ox - v0x, sy = r->oy - v0y, sz = r->oz - v0z;
+    float16 u = (sx * pvx + sy * pvy + sz * pvz) * inv;
+    ok &= ~((u < 0.0f) | (u > 1.0f));
+    float16 qx = sy * e1z - sz * e1y;
+    float16 qy = sz * e1x - sx * e1z;
+    float16 qz = sx * e1y - sy * e1x;
+    float16 v = (r->dx * qx + r->dy * qy + r->dz * qz) * inv;
+    ok &= ~((v < 0.0f) | (u + v > 1.0f));
+    float16 t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+    ok &= (t >= r->tmin) & (t <= limit) & (t < *bt);
+    *btri = select(*btri, triv, as_uint16(ok));
+    *bt = select(*bt, t, ok);
+    *bu = select(*bu, u, ok);
+    *bv = select(*bv, v, ok);
+}
+#endif
+
+/* One ray of rt_intersect (the records after the last block of 16, and
+ * every ray with the watertight test): up to RT_UNROLL_TESTS triangles.
+ * Returns the ray's next stream; adds the tests done to *tested_out. */
+inline uint rt_intersect_one(const rt_grid_args *g, global const rt_ray *rays, global rt_walk *walk,
+                             global rt_hit *hits, global uint *maxima,
+                             global const uint *cell_start, global const uint *cell_tris,
+                             global const float *tv, uint id, uint *tested_out)
+{
+    rt_rayp r = rt_prepare(&rays[id]);
+    rt_walk w = walk[id];
+    int3 c = (int3)(w.cx, w.cy, w.cz);
+    uint ci = rt_cell_index(g, c);
+    uint end = cell_start[ci + 1u];
+    int axis;
+    float te = rt_voxel_exit(g, &r, c, &axis);
+    float limit = r.any_hit ? r.tmax : rt_voxel_limit(te, r.tmax);
+    uint stop = min(end, w.pos + (uint)RT_UNROLL_TESTS);
+    global rt_hit *h = &hits[id];
+    rt_best b;
+    b.tri = h->tri;
+    b.t = h->t;
+    b.u = h->u;
+    b.v = h->v;
+    uint before = b.tri;
+    rt_intersect_list(cell_tris, tv, w.pos, stop, &r, limit, &b);
+    uint tested = stop - w.pos;
+    uint tests = h->tests + tested;
+    h->tests = tests;
+    if (b.tri != before || b.t != h->t) {
+        h->tri = b.tri;
+        h->t = b.t;
+        h->u = b.u;
+        h->v = b.v;
+    }
+    uint next;
+    if (stop < end) {
+        next = RT_NEXT_INTERSECT;
+        w.pos = stop;
+        walk[id] = w;
+    } else if (b.tri != RT_NO_HIT || te >= r.tmax || !rt_voxel_step(g, &r, &c, axis)) {
+        next = RT_NEXT_DONE;
+        rt_stream_maxima(maxima, h->steps, tests);
+    } else {
+        next = RT_NEXT_TRAVERSE;
+        w.cx = c.x;
+        w.cy = c.y;
+        w.cz = c.z;
+        walk[id] = w;
+    }
+    *tested_out += tested;
+    return next;
 }
 
 /* Up to RT_UNROLL_TESTS triangles of the ray's voxel. When the voxel's list
  * is done: a hit inside the voxel finishes the ray (hits beyond the voxel's
  * exit were rejected, so the first voxel with a hit holds the nearest one);
- * otherwise the ray steps to the next voxel and goes back to traversal. */
-__kernel void rt_intersect(SLUICE_PARAMS, global const rt_state *in, global rt_state *out,
-                           global const rt_ray *rays, global rt_hit *hits, global uint *maxima,
-                           global const uint *cell_start, global const uint *cell_tris,
-                           global const float *tv, const rt_grid_args g)
+ * otherwise the ray steps to the next voxel and goes back to traversal.
+ * Blocks of 16 rays run in lanes (Moller-Trumbore; the watertight test runs
+ * ray by ray). */
+__kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *codes,
+                           global rt_walk *walk, global const rt_ray *rays, global rt_hit *hits,
+                           global uint *maxima, global const uint *cell_start,
+                           global const uint *cell_tris, global const float *tv,
+                           const rt_grid_args g)
 {
-    SLUICE_FOR_EACH (i) {
-        rt_state s = in[i];
-        rt_rayp r = rt_prepare(&rays[s.ray]);
-        int3 c = (int3)(s.cx, s.cy, s.cz);
-        uint ci = rt_cell_index(&g, c);
-        uint end = cell_start[ci + 1u];
-        int axis;
-        float te = rt_voxel_exit(&g, &r, c, &axis);
-        float limit = r.any_hit ? r.tmax : rt_voxel_limit(te, r.tmax);
-        uint stop = min(end, s.pos + (uint)RT_UNROLL_TESTS);
-        rt_best b;
-        rt_state_best(&s, &b);
-        rt_intersect_list(cell_tris, tv, s.pos, stop, &r, limit, &b);
-        uint tested = stop - s.pos;
-        s.tests += tested;
-        s.pos = stop;
-        s.best_tri = b.tri;
-        s.best_t = b.t;
-        s.best_u = b.u;
-        s.best_v = b.v;
-        if (stop < end) {
-            s.next = RT_NEXT_INTERSECT;
-        } else if (b.tri != RT_NO_HIT || te >= r.tmax || !rt_voxel_step(&g, &r, &c, axis)) {
-            s.next = RT_NEXT_DONE;
-            rt_finish_hit(hits, s.ray, &b, s.steps, s.tests, maxima);
-        } else {
-            s.next = RT_NEXT_TRAVERSE;
-            s.cx = c.x;
-            s.cy = c.y;
-            s.cz = c.z;
+    SLUICE_FOR_EACH_RANGE(lo, hi)
+    {
+        uint i = lo, tested_all = 0u, done_all = 0u;
+#ifndef RT_WATERTIGHT
+        for (; i + 16u <= hi; i += 16u) {
+            uint16 idv = vload16(0, ids + i);
+            rt_ray16 r;
+            rt_ray16_load(rays, idv, &r);
+            uint id[16];
+            vstore16(idv, 0, id);
+            int wc[4][16];
+            uint hb[5][16];
+            for (uint l = 0; l < 16u; ++l) {
+                rt_walk w = walk[id[l]];
+                wc[0][l] = w.cx;
+                wc[1][l] = w.cy;
+                wc[2][l] = w.cz;
+                wc[3][l] = (int)w.pos;
+                global const rt_hit *h = &hits[id[l]];
+                hb[0][l] = h->tri;
+                hb[1][l] = as_uint(h->t);
+                hb[2][l] = as_uint(h->u);
+                hb[3][l] = as_uint(h->v);
+                hb[4][l] = h->tests;
+            }
+            int16 cx = vload16(0, wc[0]), cy = vload16(0, wc[1]), cz = vload16(0, wc[2]);
+            uint16 pos = as_uint16(vload16(0, wc[3]));
+            uint16 ci =
+                as_uint16(cx) + (uint)g.dims[0] * (as_uint16(cy) + (uint)g.dims[1] * as_uint16(cz));
+            uint16 end = rt_gather16(cell_start, ci + 1u, (int16)-1);
+            int16 axis;
+            float16 te = rt_voxel_exit16(&g, &r, cx, cy, cz, &axis);
+            float16 limit = select(fmin(te + fabs(te) * 1e-6f, r.tmax), r.tmax, r.any_hit);
+            uint16 stop = min(end, pos + (uint)RT_UNROLL_TESTS);
+            uint16 btri = vload16(0, hb[0]), bt0 = vload16(0, hb[1]);
+            float16 bt = as_float16(bt0), bu = as_float16(vload16(0, hb[2])),
+                    bv = as_float16(vload16(0, hb[3]));
+            for (uint j = 0; j < (uint)RT_UNROLL_TESTS; ++j) {
+                uint16 at = pos + j;
+                int16 m = as_int16(at < stop);
+                if (!any(m))
+                    break;
+                uint16 tri = rt_gather16(cell_tris, at, m);
+                rt_intersect_tri16(tv, tri, m, &r, limit, &btri, &bt, &bu, &bv);
+            }
+            uint16 tested = stop - pos;
+            int16 more = as_int16(stop < end);
+            int16 fin = ~more & (as_int16(btri != (uint16)RT_NO_HIT) | (te >= r.tmax));
+            int16 go = ~more & ~fin;
+            int16 sx = go & (axis == 0), sy = go & (axis == 1), sz = go & (axis == 2);
+            cx += select((int16)0, select((int16)-1, (int16)1, r.dx > 0.0f), sx);
+            cy += select((int16)0, select((int16)-1, (int16)1, r.dy > 0.0f), sy);
+            cz += select((int16)0, select((int16)-1, (int16)1, r.dz > 0.0f), sz);
+            int16 out = (sx & ((cx < 0) | (cx >= g.dims[0]))) |
+                        (sy & ((cy < 0) | (cy >= g.dims[1]))) |
+                        (sz & ((cz < 0) | (cz >= g.dims[2])));
+            int16 done = fin | out;
+            uint16 next =
+                select(select((uint16)RT_NEXT_TRAVERSE, (uint16)RT_NEXT_INTERSECT, as_uint16(more)),
+                       (uint16)RT_NEXT_DONE, as_uint16(done));
+            vstore16(next, 0, codes + i);
+            uint ts[16], nx[16], tri[16];
+            float ft[16], fu[16], fv[16];
+            vstore16(tested, 0, ts);
+            vstore16(next, 0, nx);
+            vstore16(btri, 0, tri);
+            vstore16(bt, 0, ft);
+            vstore16(bu, 0, fu);
+            vstore16(bv, 0, fv);
+            vstore16(cx, 0, wc[0]);
+            vstore16(cy, 0, wc[1]);
+            vstore16(cz, 0, wc[2]);
+            vstore16(as_int16(stop), 0, wc[3]);
+            for (uint l = 0; l < 16u; ++l) {
+                global rt_hit *h = &hits[id[l]];
+                uint tests = hb[4][l] + ts[l];
+                h->tests = tests;
+                if (tri[l] != hb[0][l] || as_uint(ft[l]) != hb[1][l]) {
+                    h->tri = tri[l];
+                    h->t = ft[l];
+                    h->u = fu[l];
+                    h->v = fv[l];
+                }
+                if (nx[l] == RT_NEXT_DONE) {
+                    rt_stream_maxima(maxima, h->steps, tests);
+                } else {
+                    rt_walk w;
+                    w.cx = wc[0][l];
+                    w.cy = wc[1][l];
+                    w.cz = wc[2][l];
+                    w.pos = (uint)wc[3][l];
+                    walk[id[l]] = w;
+                }
+                tested_all += ts[l];
+            }
+            done_all += (uint)popcount((uint)sluice_mask16(done));
         }
-        out[i] = s;
-        SLUICE_COUNT(1, tested);
-        SLUICE_COUNT(2, s.next == RT_NEXT_DONE);
+#endif
+        for (; i < hi; ++i) {
+            uint next = rt_intersect_one(&g, rays, walk, hits, maxima, cell_start, cell_tris, tv,
+                                         ids[i], &tested_all);
+            codes[i] = next;
+            done_all += next == RT_NEXT_DONE;
+        }
+        SLUICE_COUNT(1, tested_all);
+        SLUICE_COUNT(2, done_all);
     }
 }
 
-/* The conditional outputs: slot 0 the traverse stream, slot 1 the intersect
- * stream. Finished rays go nowhere: their hit is already written. */
-__kernel void rt_route(SLUICE_PARAMS, global const rt_state *in, global rt_state *trav,
-                       global rt_state *isect)
+/* The conditional outputs: the ids of a pass's rays go by their codes to
+ * slot 0, the traverse stream, or slot 1, the intersect stream; finished rays
+ * go nowhere (their hit is in place). 16 at a time. */
+__kernel void rt_route(SLUICE_PARAMS, global const uint *codes, global const uint *ids,
+                       global uint *trav, global uint *isect)
 {
-    SLUICE_FOR_EACH (i) {
-        rt_state s = in[i];
-        SLUICE_EMIT_IF(0, trav, s, s.next == RT_NEXT_TRAVERSE);
-        SLUICE_EMIT_IF(1, isect, s, s.next == RT_NEXT_INTERSECT);
+    SLUICE_FOR_EACH_RANGE(b, e)
+    {
+        uint i = b;
+        for (; i + 16u <= e; i += 16u) {
+            uint16 x = vload16(0, ids + i), cv = vload16(0, codes + i);
+            SLUICE_EMIT16(0, trav, x, sluice_mask16(as_int16(cv == (uint16)RT_NEXT_TRAVERSE)));
+            SLUICE_EMIT16(1, isect, x, sluice_mask16(as_int16(cv == (uint16)RT_NEXT_INTERSECT)));
+        }
+        for (; i < e; ++i) {
+            uint cd = codes[i];
+            SLUICE_EMIT_IF(0, trav, ids[i], cd == RT_NEXT_TRAVERSE);
+            SLUICE_EMIT_IF(1, isect, ids[i], cd == RT_NEXT_INTERSECT);
+        }
+    }
+}
+
+/* After setup: the codes are indexed by ray, so record i is ray i. */
+__kernel void rt_route_setup(SLUICE_PARAMS, global const uint *codes, global uint *trav)
+{
+    SLUICE_FOR_EACH_RANGE(b, e)
+    {
+        const uint16 lane =
+            (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+        uint i = b;
+        for (; i + 16u <= e; i += 16u) {
+            uint16 cv = vload16(0, codes + i);
+            SLUICE_EMIT16(0, trav, (uint16)i + lane,
+                          sluice_mask16(as_int16(cv == (uint16)RT_NEXT_TRAVERSE)));
+        }
+        for (; i < e; ++i)
+            SLUICE_EMIT_IF(0, trav, i, codes[i] == RT_NEXT_TRAVERSE);
     }
 }

@@ -69,27 +69,24 @@ typedef struct rt_hit {
 } rt_hit;
 
 /**
- * The traversal state of a ray in the stream execution mode: which ray
- * (an index into the wave's ray stream, gathered as Purcell's kernels gather
- * from textures), its voxel, the position of the next triangle to test in that
- * voxel's list, and the best hit so far. The voxel's entry and exit along the
- * ray are recomputed from the voxel index (rt_trace.cl), so no t is carried
- * that could drift. 48 bytes.
+ * Where a ray stands in the grid in the stream execution mode, kept in a
+ * buffer indexed by ray (Purcell keeps ray state in textures indexed by ray;
+ * the streams between passes carry only 4-byte ray ids): its voxel and the
+ * position of the next triangle to test in that voxel's list. The best hit
+ * so far and the work counts live in the ray's rt_hit record, updated in
+ * place. The voxel's entry and exit along the ray are recomputed from the
+ * voxel index (rt_trace.cl), so no t is carried that could drift. 16 bytes.
  */
-typedef struct rt_state {
-    rt_u32 ray;
+typedef struct rt_walk {
     rt_i32 cx, cy, cz;
-    rt_u32 pos; /* next index into cell_tris (intersect), or the list start */
-    rt_u32 best_tri;
-    float best_t, best_u, best_v;
-    rt_u32 steps, tests;
-    rt_u32 next; /* where the route kernel sends it: RT_NEXT_* */
-} rt_state;
+    rt_u32 pos; /* next index into cell_tris (intersect) */
+} rt_walk;
 
-/* Where a ray goes after a traverse or intersect pass (rt_state.next). */
-#define RT_NEXT_DONE 0u
-#define RT_NEXT_TRAVERSE 1u
-#define RT_NEXT_INTERSECT 2u
+/* Where a ray goes after a pass of the stream mode (the code stream the
+ * route kernel reads, one per ray of the pass). */
+#define RT_NEXT_TRAVERSE 0u
+#define RT_NEXT_INTERSECT 1u
+#define RT_NEXT_DONE 2u
 
 /**
  * The grid as the kernels see it (a plain struct argument): the box the
