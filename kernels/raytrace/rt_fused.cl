@@ -47,7 +47,9 @@ inline void rt_trace_one(const rt_grid_args *g, global const uint *cell_start,
  * per lane of 16-wide vectors: every lane runs exactly the scalar functions'
  * operations (same order, no contraction), so the hits and the counts are the
  * stream mode's bit for bit. Lanes advance in lockstep, one voxel per round;
- * a lane whose voxel is empty, or whose ray is done, idles (masked). Loads of
+ * a lane whose voxel is empty, or whose ray is done, idles (masked). When all
+ * active lanes are in one voxel (coherent rays in a small scene), its list
+ * is read with scalar loads and its triangles broadcast, with no gathers. Loads of
  * per-lane addresses are AVX-512 gathers where the compiler offers them. The
  * watertight intersector keeps the scalar loop (rt_trace_one). */
 #if !defined(RT_WATERTIGHT) && !defined(RT_FUSED_SCALAR)
@@ -90,6 +92,19 @@ inline int16 rt_gather_i(global const uint *p, int16 idx, int16 m)
 #endif
 }
 
+/* The value of x in the first lane set in mask am (am != 0). */
+inline int rt_first_lane(int16 x, ushort am)
+{
+#ifdef SLUICE_AVX512_
+    int16 c = __builtin_ia32_compresssi512_mask(x, (int16)0, am);
+    return c.s0;
+#else
+    int l[16];
+    vstore16(x, 0, l);
+    return l[31 - clz((uint)am & (0u - (uint)am))];
+#endif
+}
+
 /* Whether any lane of a mask (lanes 0 or -1) is set: one mask test on
  * AVX-512 (the generic any() tests sign bits lane by lane there). */
 inline int rt_any16(int16 m)
@@ -119,38 +134,13 @@ inline int2 rt_minmax16(int16 x, int16 m)
     return (int2)(min(l2.x, l2.y), max(h2.x, h2.y));
 }
 
-/* rt_intersect_tri (Moller-Trumbore) in the lanes where m is set. When all of
- * them test the same triangle (coherent rays), its vertices are read once
- * and broadcast instead of gathered. */
-__attribute__((always_inline)) inline void rt_intersect16(global const float *tv, int16 tri,
-                                                          int16 m, rt_packet *P, float16 limit)
+/* The Moller-Trumbore test of rt_intersect_tri in the lanes where m is set,
+ * against the triangle (v0, e1, e2) of each lane; keeps hits in P. */
+__attribute__((always_inline)) inline void
+rt_intersect16_core(int16 tri, int16 m, rt_packet *P, float16 limit, float16 v0x, float16 v0y,
+                    float16 v0z, float16 e1x, float16 e1y, float16 e1z, float16 e2x, float16 e2y,
+                    float16 e2z)
 {
-    float16 v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z;
-    int2 mm = rt_minmax16(tri, m);
-    if (mm.x == mm.y) {
-        global const float *q = tv + 9u * (size_t)(uint)mm.x;
-        float3 a = vload3(0, q), b = vload3(1, q), c = vload3(2, q);
-        v0x = (float16)a.x;
-        v0y = (float16)a.y;
-        v0z = (float16)a.z;
-        e1x = (float16)(b.x - a.x);
-        e1y = (float16)(b.y - a.y);
-        e1z = (float16)(b.z - a.z);
-        e2x = (float16)(c.x - a.x);
-        e2y = (float16)(c.y - a.y);
-        e2z = (float16)(c.z - a.z);
-    } else {
-        int16 at = tri * 9;
-        v0x = rt_gather_f(tv, at, m);
-        v0y = rt_gather_f(tv, at + 1, m);
-        v0z = rt_gather_f(tv, at + 2, m);
-        e1x = rt_gather_f(tv, at + 3, m) - v0x;
-        e1y = rt_gather_f(tv, at + 4, m) - v0y;
-        e1z = rt_gather_f(tv, at + 5, m) - v0z;
-        e2x = rt_gather_f(tv, at + 6, m) - v0x;
-        e2y = rt_gather_f(tv, at + 7, m) - v0y;
-        e2z = rt_gather_f(tv, at + 8, m) - v0z;
-    }
     float16 pvx = P->dy * e2z - P->dz * e2y, pvy = P->dz * e2x - P->dx * e2z,
             pvz = P->dx * e2y - P->dy * e2x;
     float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
@@ -168,6 +158,43 @@ __attribute__((always_inline)) inline void rt_intersect16(global const float *tv
     P->t = select(P->t, t, m);
     P->u = select(P->u, u, m);
     P->v = select(P->v, v, m);
+}
+
+/* rt_intersect16 for one triangle that every lane of m tests (broadcast). */
+__attribute__((always_inline)) inline void rt_intersect16_one(global const float *tv, uint tri,
+                                                              int16 m, rt_packet *P, float16 limit)
+{
+    global const float *q = tv + 9u * (size_t)tri;
+    float3 a = vload3(0, q), b = vload3(1, q), c = vload3(2, q);
+    rt_intersect16_core((int16)(int)tri, m, P, limit, (float16)a.x, (float16)a.y, (float16)a.z,
+                        (float16)(b.x - a.x), (float16)(b.y - a.y), (float16)(b.z - a.z),
+                        (float16)(c.x - a.x), (float16)(c.y - a.y), (float16)(c.z - a.z));
+}
+
+/* rt_intersect_tri (Moller-Trumbore) in the lanes where m is set. When all of
+ * them test the same triangle (coherent rays), its vertices are read once
+ * and broadcast instead of gathered. */
+__attribute__((always_inline)) inline void rt_intersect16(global const float *tv, int16 tri,
+                                                          int16 m, rt_packet *P, float16 limit)
+{
+    float16 v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z;
+    int2 mm = rt_minmax16(tri, m);
+    if (mm.x == mm.y) {
+        rt_intersect16_one(tv, (uint)mm.x, m, P, limit);
+        return;
+    } else {
+        int16 at = tri * 9;
+        v0x = rt_gather_f(tv, at, m);
+        v0y = rt_gather_f(tv, at + 1, m);
+        v0z = rt_gather_f(tv, at + 2, m);
+        e1x = rt_gather_f(tv, at + 3, m) - v0x;
+        e1y = rt_gather_f(tv, at + 4, m) - v0y;
+        e1z = rt_gather_f(tv, at + 5, m) - v0z;
+        e2x = rt_gather_f(tv, at + 6, m) - v0x;
+        e2y = rt_gather_f(tv, at + 7, m) - v0y;
+        e2z = rt_gather_f(tv, at + 8, m) - v0z;
+    }
+    rt_intersect16_core(tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
 }
 
 /* Traces rays [first, first + count) (count <= 16) as one packet and writes
@@ -236,8 +263,19 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
     while (rt_any16(active)) {
         steps -= as_uint16(active);
         int16 ci = as_int16(as_uint16(cx) + (uint)nx * (as_uint16(cy) + (uint)ny * as_uint16(cz)));
-        int16 a = rt_gather_i(cell_start, ci, active);
-        int16 b = rt_gather_i(cell_start, ci + 1, active);
+        /* coherent rays: when every active lane is in the same voxel, its
+         * list is read once (no gathers) */
+        ushort am = sluice_mask16(active);
+        int ci0 = rt_first_lane(ci, am);
+        int uniform = sluice_mask16(active & (ci == ci0)) == am;
+        int16 a, b;
+        if (uniform) {
+            a = (int16)(int)cell_start[ci0];
+            b = (int16)(int)cell_start[ci0 + 1];
+        } else {
+            a = rt_gather_i(cell_start, ci, active);
+            b = rt_gather_i(cell_start, ci + 1, active);
+        }
         /* rt_voxel_exit */
         float16 bx = g->lo[0] + convert_float16(cx + fx) * g->cell[0];
         float16 by = g->lo[1] + convert_float16(cy + fy) * g->cell[1];
@@ -254,13 +292,18 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
         if (rt_any16(full)) {
             tests += as_uint16(select((int16)0, b - a, full));
             float16 limit = select(rt_voxel_limit16(te, P.tmax), P.tmax, P.any_hit);
-            int16 k = a, m = full;
-            do {
-                int16 tri = rt_gather_i(cell_tris, k, m);
-                rt_intersect16(tv, tri, m, &P, limit);
-                k += 1;
-                m &= k < b;
-            } while (rt_any16(m));
+            if (uniform) {
+                for (uint k = (uint)a.s0, kb = (uint)b.s0; k < kb; ++k)
+                    rt_intersect16_one(tv, cell_tris[k], full, &P, limit);
+            } else {
+                int16 k = a, m = full;
+                do {
+                    int16 tri = rt_gather_i(cell_tris, k, m);
+                    rt_intersect16(tv, tri, m, &P, limit);
+                    k += 1;
+                    m &= k < b;
+                } while (rt_any16(m));
+            }
         }
         int16 done = (P.tri != -1) | (te >= P.tmax);
         int16 go = active & ~done;
