@@ -23,8 +23,7 @@
 __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint *flags,
                          global uint *out)
 {
-    SLUICE_FOR_EACH_RANGE(b, e)
-    {
+    SLUICE_FOR_EACH_RANGE (b, e) {
         uint i = b;
         for (; i + 16u <= e; i += 16u)
             SLUICE_EMIT16(0, out, vload16(0, in + i),
@@ -95,8 +94,7 @@ __kernel void split_w1(SLUICE_PARAMS, global const uint *in, global const uint *
                        global uint *o0, global uint *o1, global uint *o2, global uint *o3,
                        global uint *o4, global uint *o5, global uint *o6, global uint *o7)
 {
-    SLUICE_FOR_EACH_RANGE(lo, hi)
-    {
+    SLUICE_FOR_EACH_RANGE (lo, hi) {
         uint i = lo;
         for (; i + 16u <= hi; i += 16u) {
             uint16 x = vload16(0, in + i), bv = vload16(0, buckets + i);
@@ -146,8 +144,7 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
     __kernel void partition_##SUFFIX(SLUICE_PARAMS, global const uint *in, T t,                    \
                                      global uint *below, global uint *above)                       \
     {                                                                                              \
-        SLUICE_FOR_EACH_RANGE(b, e)                                                                \
-        {                                                                                          \
+        SLUICE_FOR_EACH_RANGE (b, e) {                                                             \
             uint i = b;                                                                            \
             for (; i + 16u <= e; i += 16u) {                                                       \
                 uint16 x = vload16(0, in + i);                                                     \

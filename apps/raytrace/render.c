@@ -1,5 +1,6 @@
 /* See render.h. */
 #include "render.h"
+#include "app_error.h"
 
 #include "tracer_internal.h"
 
@@ -26,16 +27,6 @@ struct rt_renderer {
     size_t per_shadow, per_secondary;
     rt_render_stats stats;
 };
-
-static void fail(char *err, size_t err_size, const char *fmt, ...)
-{
-    if (!err || !err_size)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, err_size, fmt, ap);
-    va_end(ap);
-}
 
 static void sub3(const float a[3], const float b[3], float o[3])
 {
@@ -112,12 +103,12 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
         opt->width > SLUICE_SCENE_MAX_IMAGE_SIDE || opt->height > SLUICE_SCENE_MAX_IMAGE_SIDE ||
         (uint64_t)opt->width * opt->height > (1u << 26) || opt->light_samples == 0 ||
         opt->light_samples > 1024 || opt->max_depth > 64) {
-        fail(err, err_size, "renderer: bad options");
+        sluice_set_error(err, err_size, "renderer: bad options");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     rt_renderer *r = calloc(1, sizeof *r);
     if (!r) {
-        fail(err, err_size, "out of host memory");
+        sluice_set_error(err, err_size, "out of host memory");
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     r->t = t;
@@ -195,7 +186,7 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     if (st == SLUICE_OK)
         st = sluice_kernel_set_counters(r->k_resolve, r->counters);
     if (st != SLUICE_OK) {
-        fail(err, err_size, "renderer: %s", sluice_context_error(ctx));
+        sluice_set_error(err, err_size, "renderer: %s", sluice_context_error(ctx));
         rt_renderer_destroy(r);
         return st;
     }

@@ -1,5 +1,6 @@
 /* See tracer.h. Creation: scene upload, grid, program and kernels. */
 #include "tracer_internal.h"
+#include "app_error.h"
 
 #include "rt_kernels.h"
 
@@ -24,16 +25,6 @@ rt_tracer_options rt_tracer_options_default(void)
     o.ordered = 0;
     o.render_mode = RT_MODE_SHADOW;
     return o;
-}
-
-static void fail(char *err, size_t err_size, const char *fmt, ...)
-{
-    if (!err || !err_size)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, err_size, fmt, ap);
-    va_end(ap);
 }
 
 /* Creates a stream of max(count, 1) records and uploads `count` of them. */
@@ -147,7 +138,7 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
     if (t->opt.grid_build == RT_GRID_BUILD_DEVICE) {
         st = rt_grid_build_device(t->ctx, &desc, t->positions, t->indices, nt, &t->grid);
         if (st != SLUICE_OK)
-            fail(err, err_size, "grid: %s", sluice_context_error(t->ctx));
+            sluice_set_error(err, err_size, "grid: %s", sluice_context_error(t->ctx));
     } else {
         rt_grid_host h;
         memset(&h, 0, sizeof h);
@@ -156,7 +147,7 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
         if (st == SLUICE_OK) {
             st = rt_grid_upload(t->ctx, &h, &t->grid);
             if (st != SLUICE_OK)
-                fail(err, err_size, "grid upload: %s", sluice_context_error(t->ctx));
+                sluice_set_error(err, err_size, "grid upload: %s", sluice_context_error(t->ctx));
         }
         rt_grid_host_free(&h);
     }
@@ -219,7 +210,7 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     if (st == SLUICE_OK)
         st = sluice_program_build(t->program);
     if (st != SLUICE_OK) {
-        fail(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
+        sluice_set_error(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
         return st;
     }
     st = sluice_kernel_create(t->program, "rt_setup", &t->k_setup);
@@ -236,7 +227,7 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     if (st == SLUICE_OK)
         st = sluice_kernel_create(t->program, "rt_trace_fused", &t->k_fused);
     if (st != SLUICE_OK)
-        fail(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
+        sluice_set_error(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
     return st;
 }
 
@@ -247,20 +238,20 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
     if (out)
         *out = NULL;
     if (!ctx || !scene || !out) {
-        fail(err, err_size, "rt_tracer_create: NULL argument");
+        sluice_set_error(err, err_size, "rt_tracer_create: NULL argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     rt_tracer_options o = opt ? *opt : rt_tracer_options_default();
     if (o.unroll_steps == 0 || o.unroll_tests == 0 || o.unroll_steps > 4096 ||
         o.unroll_tests > 4096 || !(o.intersect_threshold >= 0.0f) || o.intersect_threshold > 1.0f) {
-        fail(err, err_size,
-             "rt_tracer_create: bad options (min dim %u, unroll %u/%u, threshold %g)",
-             o.grid_min_dim, o.unroll_steps, o.unroll_tests, (double)o.intersect_threshold);
+        sluice_set_error(
+            err, err_size, "rt_tracer_create: bad options (min dim %u, unroll %u/%u, threshold %g)",
+            o.grid_min_dim, o.unroll_steps, o.unroll_tests, (double)o.intersect_threshold);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     rt_tracer *t = calloc(1, sizeof *t);
     if (!t) {
-        fail(err, err_size, "out of host memory");
+        sluice_set_error(err, err_size, "out of host memory");
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     t->ctx = ctx;
@@ -268,7 +259,7 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
     t->opt = o;
     sluice_status st = upload_scene(t);
     if (st != SLUICE_OK)
-        fail(err, err_size, "scene upload: %s", sluice_context_error(ctx));
+        sluice_set_error(err, err_size, "scene upload: %s", sluice_context_error(ctx));
     if (st == SLUICE_OK)
         st = build_grid(t, err, err_size);
     if (st == SLUICE_OK)
@@ -286,7 +277,7 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
         st = sluice_kernel_set_counters(t->k_fused, t->counters);
     if (st != SLUICE_OK) {
         if (err && err_size && !err[0])
-            fail(err, err_size, "ray tracer: %s", sluice_context_error(ctx));
+            sluice_set_error(err, err_size, "ray tracer: %s", sluice_context_error(ctx));
         rt_tracer_destroy(t);
         return st;
     }

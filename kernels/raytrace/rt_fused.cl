@@ -344,8 +344,7 @@ __kernel void rt_trace_fused(SLUICE_PARAMS, global const rt_ray *rays, global rt
                              const rt_grid_args g)
 {
 #ifdef RT_PACKET
-    SLUICE_FOR_EACH_RANGE(b, e)
-    {
+    SLUICE_FOR_EACH_RANGE (b, e) {
         uint steps = 0u, tests = 0u;
         for (uint p = b; p < e; p += 16u)
             rt_trace_packet(&g, rays, p, min(16u, e - p), hits, maxima, cell_start, cell_tris, tv,

@@ -151,8 +151,7 @@ inline int rt_setup_one(const rt_grid_args *g, global const rt_ray *rays, global
 __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *codes,
                        global rt_walk *walk, global rt_hit *hits, const rt_grid_args g)
 {
-    SLUICE_FOR_EACH_RANGE(lo, hi)
-    {
+    SLUICE_FOR_EACH_RANGE (lo, hi) {
         const uint16 lane =
             (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
         uint i = lo;
@@ -256,8 +255,7 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
                           global rt_walk *walk, global const rt_ray *rays, global rt_hit *hits,
                           global uint *maxima, global const uint *cell_start, const rt_grid_args g)
 {
-    SLUICE_FOR_EACH_RANGE(lo, hi)
-    {
+    SLUICE_FOR_EACH_RANGE (lo, hi) {
         uint i = lo, visited_all = 0u, done_all = 0u;
         for (; i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
@@ -450,8 +448,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                            global const uint *cell_tris, global const float *tv,
                            const rt_grid_args g)
 {
-    SLUICE_FOR_EACH_RANGE(lo, hi)
-    {
+    SLUICE_FOR_EACH_RANGE (lo, hi) {
         uint i = lo, tested_all = 0u, done_all = 0u;
 #ifndef RT_WATERTIGHT
         for (; i + 16u <= hi; i += 16u) {
@@ -565,8 +562,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
 __kernel void rt_route(SLUICE_PARAMS, global const uint *codes, global const uint *ids,
                        global uint *trav, global uint *isect)
 {
-    SLUICE_FOR_EACH_RANGE(b, e)
-    {
+    SLUICE_FOR_EACH_RANGE (b, e) {
         uint i = b;
         for (; i + 16u <= e; i += 16u) {
             uint16 x = vload16(0, ids + i), cv = vload16(0, codes + i);
@@ -584,8 +580,7 @@ __kernel void rt_route(SLUICE_PARAMS, global const uint *codes, global const uin
 /* After setup: the codes are indexed by ray, so record i is ray i. */
 __kernel void rt_route_setup(SLUICE_PARAMS, global const uint *codes, global uint *trav)
 {
-    SLUICE_FOR_EACH_RANGE(b, e)
-    {
+    SLUICE_FOR_EACH_RANGE (b, e) {
         const uint16 lane =
             (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
         uint i = b;
