@@ -46,7 +46,7 @@ static uint32_t xorshift(uint32_t *s)
 }
 
 static sluice_context *ctx;
-static int reps = 5;
+static int reps = 10;
 
 #define TRY(call)                                                                                  \
     do {                                                                                           \
