@@ -209,14 +209,26 @@ inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
  * packed and stored as one 64-byte store, which is what brings conditional
  * output near the copy bandwidth (bench/README.md). Elsewhere, or when the
  * host asks for portable kernels (SLUICE_NO_SIMD), the same macros write the
- * lanes one by one. Either way the result is the same, so the portable path
- * is tested on the same inputs (tests/meson.build: compact_portable). */
+ * lanes one by one: the same result, but slower than the per-record macros,
+ * so fast kernels test SLUICE_EMIT16_FAST (below) before taking blocks. Both
+ * paths are tested on the same inputs (tests/meson.build: runtime_portable,
+ * compact_portable). */
 #if !defined(SLUICE_NO_SIMD) && defined(__AVX512F__) && defined(__clang__) && defined(__has_builtin)
 #if __has_builtin(__builtin_ia32_compresssi512_mask) &&                                            \
     __has_builtin(__builtin_ia32_compressstoresi512_mask) &&                                       \
     __has_builtin(__builtin_ia32_storedqusi512_mask) && __has_builtin(__builtin_ia32_cmpd512_mask)
 #define SLUICE_AVX512_ 1
 #endif
+#endif
+
+/* 1 when SLUICE_EMIT16 compiles to compress instructions, else 0. The
+ * lane-by-lane fallback is correct but slower than the per-record macros, so
+ * a kernel can take 16-record blocks only when this is 1:
+ *     for (; SLUICE_EMIT16_FAST && i + 16u <= e; i += 16u) ...  */
+#ifdef SLUICE_AVX512_
+#define SLUICE_EMIT16_FAST 1
+#else
+#define SLUICE_EMIT16_FAST 0
 #endif
 
 /* The mask of the non-zero lanes of `c` (bit k for lane k), e.g. of a

@@ -38,7 +38,9 @@ static const char *kernels_src =
     "    SLUICE_FOR_EACH(i)\n"
     "        out[i] = i;\n"
     "}\n"
-    /* Block emission, as in the README's "Writing a kernel". */
+    /* Block emission as in the README's "Writing a kernel", but always in
+     * blocks (no SLUICE_EMIT16_FAST test), so that runtime_portable
+     * (SLUICE_NO_SIMD=1) runs SLUICE_EMIT16's lane-by-lane path. */
     "__kernel void small_values(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
     "{\n"
     "    SLUICE_FOR_EACH_RANGE(b, e) {\n"
