@@ -11,6 +11,7 @@
  *
  * Default scenes: cornell, bunny (when its mesh is installed), million.
  */
+#include "bench_args.h"
 #include "grid.h"
 #include "rt_kernels.h"
 #include "scene.h"
@@ -137,19 +138,6 @@ static int run_scene(sluice_context *ctx, const char *name, unsigned min_dim, un
     return ok;
 }
 
-static int parse_uint(const char *s, unsigned max, unsigned *out)
-{
-    if (!s || *s < '0' || *s > '9')
-        return 0;
-    char *end;
-    errno = 0;
-    unsigned long v = strtoul(s, &end, 10);
-    if (errno || *end || v > max)
-        return 0;
-    *out = (unsigned)v;
-    return 1;
-}
-
 int main(int argc, char **argv)
 {
     const char *scenes[MAX_SCENES], *out = NULL;
@@ -159,10 +147,10 @@ int main(int argc, char **argv)
         if (strcmp(argv[i], "--scene") == 0 && i + 1 < argc && nscenes < MAX_SCENES)
             scenes[nscenes++] = argv[++i];
         else if (strcmp(argv[i], "--min-dim") == 0 && i + 1 < argc &&
-                 parse_uint(argv[i + 1], 1u << 20, &min_dim) && min_dim > 0)
+                 bench_parse_uint(argv[i + 1], 1u << 20, &min_dim) && min_dim > 0)
             ++i;
         else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc &&
-                 parse_uint(argv[i + 1], 1000, &reps) && reps > 0)
+                 bench_parse_uint(argv[i + 1], 1000, &reps) && reps > 0)
             ++i;
         else if (strcmp(argv[i], "--out") == 0 && i + 1 < argc)
             out = argv[++i];

@@ -30,6 +30,7 @@
  * Exit status 1 when a Sluice mode or the C tracer disagrees with another on
  * more than 1% of the pixels (a broken tracer), 2 on setup errors.
  */
+#include "bench_args.h"
 #include "grid.h"
 #include "render.h"
 #include "scene.h"
@@ -752,19 +753,6 @@ static int purcell_run(const char *name, unsigned size, unsigned min_dim, purcel
 /* Main                                                                */
 /* ------------------------------------------------------------------ */
 
-static int parse_uint(const char *s, unsigned max, unsigned *out)
-{
-    if (!s || *s < '0' || *s > '9')
-        return 0;
-    char *end;
-    errno = 0;
-    unsigned long v = strtoul(s, &end, 10);
-    if (errno || *end || v > max)
-        return 0;
-    *out = (unsigned)v;
-    return 1;
-}
-
 static void usage(FILE *f)
 {
     fprintf(f, "usage: " PROG " [--size N] [--reps R] [--scene NAME]... [--out FILE]\n"
@@ -793,13 +781,13 @@ int main(int argc, char **argv)
         if (strcmp(argv[i], "--scene") == 0 && i + 1 < argc && nscenes < MAX_SCENES)
             scenes[nscenes++] = argv[++i];
         else if (strcmp(argv[i], "--size") == 0 && i + 1 < argc &&
-                 parse_uint(argv[i + 1], 8192, &size) && size > 0)
+                 bench_parse_uint(argv[i + 1], 8192, &size) && size > 0)
             ++i;
         else if (strcmp(argv[i], "--purcell-size") == 0 && i + 1 < argc &&
-                 parse_uint(argv[i + 1], 8192, &psize) && psize > 0)
+                 bench_parse_uint(argv[i + 1], 8192, &psize) && psize > 0)
             ++i;
         else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc &&
-                 parse_uint(argv[i + 1], 1000, &reps) && reps > 0)
+                 bench_parse_uint(argv[i + 1], 1000, &reps) && reps > 0)
             ++i;
         else if (strcmp(argv[i], "--out") == 0 && i + 1 < argc)
             out = argv[++i];
