@@ -374,35 +374,150 @@ static int is_closed(const sluice_scene *s)
     return closed;
 }
 
-static void leak_test(const char *name, const sluice_scene *s, const float c[3], float radius,
-                      size_t n)
+/* Categories of the rays of leak_test(). */
+enum { LK_RANDOM, LK_VERTEX, LK_VERTEX_ULP, LK_EDGE, LK_EDGE_ULP, LK_CATEGORIES };
+static const char *const lk_names[LK_CATEGORIES] = {"random directions", "at vertices",
+                                                    "at vertices +-1 ulp", "at edge points",
+                                                    "at edge points +-1 ulp"};
+
+/* The mesh's distinct undirected edges (a << 32 | b with a < b), sorted. */
+static uint64_t *unique_edges(const sluice_scene *s, size_t *count)
 {
-    rt_ray *rays = malloc(n * sizeof *rays);
-    rt_hit *hits = malloc(n * sizeof *hits);
+    size_t nt = sluice_scene_triangle_count(s);
+    const uint32_t *ix = sluice_scene_indices(s);
+    uint64_t *e = malloc(3 * nt * sizeof *e);
+    for (size_t i = 0; i < nt; ++i)
+        for (int k = 0; k < 3; ++k) {
+            uint64_t a = ix[3 * i + k], b = ix[3 * i + (k + 1) % 3];
+            e[3 * i + k] = a < b ? (a << 32 | b) : (b << 32 | a);
+        }
+    qsort(e, 3 * nt, sizeof *e, cmp_u64);
+    size_t m = 0;
+    for (size_t i = 0; i < 3 * nt; ++i)
+        if (m == 0 || e[i] != e[m - 1])
+            e[m++] = e[i];
+    *count = m;
+    return e;
+}
+
+/* Each coordinate of p moved by one ulp up or down (at random). */
+static void jitter_ulp(uint32_t *st, const float p[3], float q[3])
+{
+    for (int k = 0; k < 3; ++k)
+        q[k] = nextafterf(p[k], check_rand(st) & 1 ? INFINITY : -INFINITY);
+}
+
+/* Appends a ray from o towards the point p (and `jitters` more towards p
+ * moved by one ulp) to rays/cat. */
+static void aim(rt_ray *rays, unsigned char *cat, size_t *n, uint32_t *st, const float o[3],
+                const float p[3], int exact_cat, int jitters)
+{
+    float d[3], q[3];
+    for (int k = 0; k < 3; ++k)
+        d[k] = p[k] - o[k];
+    make_ray(&rays[*n], o, d);
+    cat[(*n)++] = (unsigned char)exact_cat;
+    for (int j = 0; j < jitters; ++j) {
+        jitter_ulp(st, p, q);
+        for (int k = 0; k < 3; ++k)
+            d[k] = q[k] - o[k];
+        make_ray(&rays[*n], o, d);
+        cat[(*n)++] = (unsigned char)(exact_cat + 1);
+    }
+}
+
+/* Rays from inside a closed mesh (origins within `radius` of c, which must
+ * lie inside it) must all hit with the watertight intersector: n_random
+ * rays in random directions, then rays aimed exactly at the mesh's shared
+ * vertices and at points v0 + s (v1 - v0) of its shared edges, and at
+ * those points moved by one ulp, from c and from a few other interior
+ * points (every `edge_stride`-th edge only, for large meshes). */
+static void leak_test(const char *name, const sluice_scene *s, const float c[3], float radius,
+                      size_t n_random, size_t edge_stride)
+{
+    static const float edge_s[] = {0.5f, 0.25f, 1.0f / 3.0f, 0.9f};
+    enum { NS = sizeof edge_s / sizeof edge_s[0], JIT = 2 };
+    /* c and points at half the radius around it. */
+    static const float offs[][3] = {
+        {0, 0, 0}, {0.5f, 0, 0}, {0, -0.5f, 0}, {0, 0, 0.5f}, {-0.3f, 0.3f, -0.3f}};
+    enum { NO = sizeof offs / sizeof offs[0] };
+    const float *pos = sluice_scene_positions(s);
+    const uint32_t *ix = sluice_scene_indices(s);
+    size_t nt = sluice_scene_triangle_count(s), nv = sluice_scene_vertex_count(s);
+    size_t ne;
+    uint64_t *edges = unique_edges(s, &ne);
+    unsigned char *used = calloc(nv, 1);
+    size_t nused = 0;
+    for (size_t i = 0; i < 3 * nt; ++i)
+        if (!used[ix[i]]) {
+            used[ix[i]] = 1;
+            ++nused;
+        }
+    size_t ne_aim = (ne + edge_stride - 1) / edge_stride;
+    size_t cap = n_random + NO * (nused * (1 + JIT) + ne_aim * NS * (1 + JIT));
+    rt_ray *rays = malloc(cap * sizeof *rays);
+    unsigned char *cat = malloc(cap);
+    rt_hit *hits = malloc(cap * sizeof *hits);
     uint32_t st = 4242;
-    for (size_t i = 0; i < n; ++i) {
+    size_t n = 0;
+    for (size_t i = 0; i < n_random; ++i) {
         float o[3], d[3];
         random_dir(&st, o);
         for (int k = 0; k < 3; ++k)
             o[k] = c[k] + radius * o[k];
         random_dir(&st, d);
-        make_ray(&rays[i], o, d);
+        make_ray(&rays[n], o, d);
+        cat[n++] = LK_RANDOM;
     }
+    for (int oi = 0; oi < NO; ++oi) {
+        float o[3];
+        for (int k = 0; k < 3; ++k)
+            o[k] = c[k] + radius * offs[oi][k];
+        for (size_t v = 0; v < nv; ++v)
+            if (used[v])
+                aim(rays, cat, &n, &st, o, pos + 3 * v, LK_VERTEX, JIT);
+        for (size_t e = 0; e < ne; e += edge_stride) {
+            const float *v0 = pos + 3 * (edges[e] >> 32), *v1 = pos + 3 * (edges[e] & 0xffffffffu);
+            for (int si = 0; si < NS; ++si) {
+                float p[3];
+                for (int k = 0; k < 3; ++k)
+                    p[k] = v0[k] + edge_s[si] * (v1[k] - v0[k]);
+                aim(rays, cat, &n, &st, o, p, LK_EDGE, JIT);
+            }
+        }
+    }
+    CHECK(n == cap, "%s: %zu rays built, %zu expected", name, n, cap);
+    CHECK(n >= 1000000 || n_random < 1000000, "%s: only %zu rays", name, n);
+    size_t per_cat[LK_CATEGORIES] = {0};
+    for (size_t i = 0; i < n; ++i)
+        ++per_cat[cat[i]];
+    printf("%s: %zu rays from inside (%d origins for the aimed rays, %zu vertices, %zu of %zu "
+           "edges):",
+           name, n, (int)NO, nused, ne_aim, ne);
+    for (int k = 0; k < LK_CATEGORIES; ++k)
+        printf(" %zu %s%s", per_cat[k], lk_names[k], k + 1 < LK_CATEGORIES ? "," : "\n");
     for (int w = 0; w < 2; ++w) {
         rt_tracer *t =
             make_tracer(s, RT_EXEC_FUSED, w ? RT_ISECT_WATERTIGHT : RT_ISECT_MT, RT_MODE_CAST);
         if (!t)
             continue;
         CHECK_OK(ctx, rt_tracer_trace(t, rays, n, hits));
-        size_t leaks = 0;
+        size_t leaks = 0, leaks_cat[LK_CATEGORIES] = {0};
         for (size_t i = 0; i < n; ++i)
-            leaks += hits[i].tri == RT_NO_HIT;
-        printf("%-28s %8zu rays from inside: %zu leaks with %s\n", name, n, leaks,
-               w ? "watertight" : "Moller-Trumbore");
+            if (hits[i].tri == RT_NO_HIT) {
+                ++leaks;
+                ++leaks_cat[cat[i]];
+            }
+        printf("  %-16s %zu leaks of %zu rays (", w ? "watertight:" : "Moller-Trumbore:", leaks, n);
+        for (int k = 0; k < LK_CATEGORIES; ++k)
+            printf("%zu %s%s", leaks_cat[k], lk_names[k], k + 1 < LK_CATEGORIES ? ", " : ")\n");
         if (w)
             CHECK(leaks == 0, "%s: watertight intersector leaked %zu of %zu rays", name, leaks, n);
         rt_tracer_destroy(t);
     }
+    free(edges);
+    free(used);
+    free(cat);
     free(rays);
     free(hits);
 }
@@ -423,13 +538,13 @@ static void test_watertight(void)
     sluice_scene_builder_destroy(b);
     if (s) {
         CHECK(is_closed(s), "the tessellated sphere is not closed");
-        leak_test("sphere (11520 triangles)", s, c, 0.8f, 1000000);
+        leak_test("sphere (11520 triangles)", s, c, 0.8f, 1000000, 1);
         sluice_scene_destroy(s);
     }
     s = load("bunny");
     if (s) {
         if (is_closed(s))
-            leak_test("bunny", s, (float[3]){0, 0, 0}, 0.05f, 200000);
+            leak_test("bunny", s, (float[3]){0, 0, 0}, 0.05f, 200000, 16);
         else
             printf("bunny: not a closed mesh (edges with other than two triangles): no leak "
                    "test\n");
