@@ -105,14 +105,22 @@ static sluice_status want_object(const jctx *c, const cJSON *v, const char *path
     return SLUICE_OK;
 }
 
+/* The field `key` of `obj`, or NULL when it is absent; `*found` (may be
+ * NULL) says whether it was there. */
+static const cJSON *optional_field(const cJSON *obj, const char *key, int *found)
+{
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (found)
+        *found = v != NULL;
+    return v;
+}
+
 /* Reads an optional number field; `*found` (may be NULL) says whether it was
  * there. */
 static sluice_status get_number(const jctx *c, const cJSON *obj, const char *key, const char *path,
                                 double *out, int *found)
 {
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
-    if (found)
-        *found = v != NULL;
+    const cJSON *v = optional_field(obj, key, found);
     if (!v)
         return SLUICE_OK;
     char p[256];
@@ -164,9 +172,7 @@ static sluice_status read_array(const jctx *c, const cJSON *v, const char *path,
 static sluice_status get_vec3(const jctx *c, const cJSON *obj, const char *key, const char *path,
                               float *out, int *found)
 {
-    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
-    if (found)
-        *found = v != NULL;
+    const cJSON *v = optional_field(obj, key, found);
     if (!v)
         return SLUICE_OK;
     char p[256];
