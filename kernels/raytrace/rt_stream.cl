@@ -384,22 +384,19 @@ inline void rt_intersect_tri16(global const float *tv, uint16 triv, int16 m, con
 #endif
 
 /* One ray of rt_intersect (the records after the last block of 16, and
- * every ray with the watertight test): up to RT_UNROLL_TESTS triangles.
- * Returns the ray's next stream; adds the tests done to *tested_out. */
+ * every ray with the watertight test): up to RT_UNROLL_TESTS triangles, over
+ * as many non-empty voxels as the budget reaches (see rt_intersect). Returns
+ * the ray's next stream; adds the tests done to *tested_out and the voxels
+ * entered to *visited_out. */
 inline uint rt_intersect_one(const rt_grid_args *g, global const rt_ray *rays, global rt_walk *walk,
                              global rt_hit *hits, global uint *maxima,
                              global const uint *cell_start, global const uint *cell_tris,
-                             global const float *tv, uint id, uint *tested_out)
+                             global const float *tv, uint id, uint *tested_out, uint *visited_out)
 {
     rt_rayp r = rt_prepare(&rays[id]);
     rt_walk w = walk[id];
     int3 c = (int3)(w.cx, w.cy, w.cz);
-    uint ci = rt_cell_index(g, c);
-    uint end = cell_start[ci + 1u];
-    int axis;
-    float te = rt_voxel_exit(g, &r, c, &axis);
-    float limit = r.any_hit ? r.tmax : rt_voxel_limit(te, r.tmax);
-    uint stop = min(end, w.pos + (uint)RT_UNROLL_TESTS);
+    uint end = cell_start[rt_cell_index(g, c) + 1u];
     global rt_hit *h = &hits[id];
     rt_best b;
     b.tri = h->tri;
@@ -407,39 +404,71 @@ inline uint rt_intersect_one(const rt_grid_args *g, global const rt_ray *rays, g
     b.u = h->u;
     b.v = h->v;
     uint before = b.tri;
-    rt_intersect_list(cell_tris, tv, w.pos, stop, &r, limit, &b);
-    uint tested = stop - w.pos;
+    float before_t = b.t;
+    uint tested = 0u, visited = 0u, next;
+    for (;;) {
+        int axis;
+        float te = rt_voxel_exit(g, &r, c, &axis);
+        float limit = r.any_hit ? r.tmax : rt_voxel_limit(te, r.tmax);
+        uint stop = min(end, w.pos + ((uint)RT_UNROLL_TESTS - tested));
+        rt_intersect_list(cell_tris, tv, w.pos, stop, &r, limit, &b);
+        tested += stop - w.pos;
+        w.pos = stop;
+        if (stop < end) {
+            next = RT_NEXT_INTERSECT;
+            break;
+        }
+        if (b.tri != RT_NO_HIT || te >= r.tmax || !rt_voxel_step(g, &r, &c, axis)) {
+            next = RT_NEXT_DONE;
+            break;
+        }
+        /* The next voxel: an empty one is traversal's (which enters it); a
+         * non-empty one is entered here and its list goes on in this pass,
+         * or in the next intersect pass when the budget is spent. */
+        uint ci = rt_cell_index(g, c);
+        uint a = cell_start[ci];
+        end = cell_start[ci + 1u];
+        if (a >= end) {
+            next = RT_NEXT_TRAVERSE;
+            break;
+        }
+        ++visited;
+        w.pos = a;
+        if (tested >= (uint)RT_UNROLL_TESTS) {
+            next = RT_NEXT_INTERSECT;
+            break;
+        }
+    }
     uint tests = h->tests + tested;
     h->tests = tests;
-    if (b.tri != before || b.t != h->t) {
+    uint steps = h->steps + visited;
+    h->steps = steps;
+    if (b.tri != before || b.t != before_t) {
         h->tri = b.tri;
         h->t = b.t;
         h->u = b.u;
         h->v = b.v;
     }
-    uint next;
-    if (stop < end) {
-        next = RT_NEXT_INTERSECT;
-        w.pos = stop;
-        walk[id] = w;
-    } else if (b.tri != RT_NO_HIT || te >= r.tmax || !rt_voxel_step(g, &r, &c, axis)) {
-        next = RT_NEXT_DONE;
-        rt_stream_maxima(maxima, h->steps, tests);
+    if (next == RT_NEXT_DONE) {
+        rt_stream_maxima(maxima, steps, tests);
     } else {
-        next = RT_NEXT_TRAVERSE;
         w.cx = c.x;
         w.cy = c.y;
         w.cz = c.z;
         walk[id] = w;
     }
     *tested_out += tested;
+    *visited_out += visited;
     return next;
 }
 
-/* Up to RT_UNROLL_TESTS triangles of the ray's voxel. When the voxel's list
- * is done: a hit inside the voxel finishes the ray (hits beyond the voxel's
- * exit were rejected, so the first voxel with a hit holds the nearest one);
- * otherwise the ray steps to the next voxel and goes back to traversal.
+/* Up to RT_UNROLL_TESTS triangles per ray. When a voxel's list is done: a
+ * hit inside the voxel finishes the ray (hits beyond the voxel's exit were
+ * rejected, so the first voxel with a hit holds the nearest one); otherwise
+ * the ray steps to the next voxel. An empty one sends the ray back to
+ * traversal; a non-empty one is entered here (counted as a voxel step, as
+ * traversal would) and its list goes on with the budget left, so the ray
+ * stays in the intersect stream instead of ping-ponging through traversal.
  * Blocks of 16 rays run in lanes (Moller-Trumbore; the watertight test runs
  * ray by ray). */
 __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *codes,
@@ -449,7 +478,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                            const rt_grid_args g)
 {
     SLUICE_FOR_EACH_RANGE (lo, hi) {
-        uint i = lo, tested_all = 0u, done_all = 0u;
+        uint i = lo, tested_all = 0u, visited_all = 0u, done_all = 0u;
 #ifndef RT_WATERTIGHT
         for (; i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
@@ -479,36 +508,69 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
             uint16 end = rt_gather16(cell_start, ci + 1u, (int16)-1);
             int16 axis;
             float16 te = rt_voxel_exit16(&g, &r, cx, cy, cz, &axis);
-            float16 limit = select(fmin(te + fabs(te) * 1e-6f, r.tmax), r.tmax, r.any_hit);
-            uint16 stop = min(end, pos + (uint)RT_UNROLL_TESTS);
+            float16 limit = select(rt_voxel_limit16(te, r.tmax), r.tmax, r.any_hit);
             uint16 btri = vload16(0, hb[0]), bt0 = vload16(0, hb[1]);
             float16 bt = as_float16(bt0), bu = as_float16(vload16(0, hb[2])),
                     bv = as_float16(vload16(0, hb[3]));
-            for (uint j = 0; j < (uint)RT_UNROLL_TESTS; ++j) {
-                uint16 at = pos + j;
-                int16 m = as_int16(at < stop);
-                if (!any(m))
+            uint16 tested = (uint16)0u, visited = (uint16)0u;
+            uint16 next = (uint16)RT_NEXT_INTERSECT;
+            int16 active = (int16)-1, done = (int16)0;
+            while (any(active)) {
+                /* the current voxel's list, as far as the budget goes */
+                uint16 stop = min(end, pos + ((uint16)RT_UNROLL_TESTS - tested));
+                stop = select(pos, stop, as_uint16(active));
+                for (uint j = 0; j < (uint)RT_UNROLL_TESTS; ++j) {
+                    uint16 at = pos + j;
+                    int16 m = as_int16(at < stop);
+                    if (!any(m))
+                        break;
+                    uint16 tri = rt_gather16(cell_tris, at, m);
+                    rt_intersect_tri16(tv, tri, m, &r, limit, &btri, &bt, &bu, &bv);
+                }
+                tested += stop - pos;
+                pos = stop;
+                /* budget spent inside the list: next intersect pass */
+                active &= ~as_int16(stop < end);
+                /* list done: a hit finishes the ray, else it steps on */
+                int16 fin = active & (as_int16(btri != (uint16)RT_NO_HIT) | (te >= r.tmax));
+                int16 go = active & ~fin;
+                int16 sx = go & (axis == 0), sy = go & (axis == 1), sz = go & (axis == 2);
+                cx += select((int16)0, select((int16)-1, (int16)1, r.dx > 0.0f), sx);
+                cy += select((int16)0, select((int16)-1, (int16)1, r.dy > 0.0f), sy);
+                cz += select((int16)0, select((int16)-1, (int16)1, r.dz > 0.0f), sz);
+                int16 out = (sx & ((cx < 0) | (cx >= g.dims[0]))) |
+                            (sy & ((cy < 0) | (cy >= g.dims[1]))) |
+                            (sz & ((cz < 0) | (cz >= g.dims[2])));
+                done |= fin | out;
+                active &= ~(fin | out);
+                if (!any(active))
                     break;
-                uint16 tri = rt_gather16(cell_tris, at, m);
-                rt_intersect_tri16(tv, tri, m, &r, limit, &btri, &bt, &bu, &bv);
+                /* the next voxel: an empty one goes to traversal (which
+                 * enters it); a non-empty one is entered here */
+                ci = as_uint16(cx) +
+                     (uint)g.dims[0] * (as_uint16(cy) + (uint)g.dims[1] * as_uint16(cz));
+                uint16 a = rt_gather16(cell_start, ci, active);
+                uint16 b = rt_gather16(cell_start, ci + 1u, active);
+                int16 empty = active & as_int16(a >= b);
+                next = select(next, (uint16)RT_NEXT_TRAVERSE, as_uint16(empty));
+                active &= ~empty;
+                visited += as_uint16(active) & (uint16)1u;
+                pos = select(pos, a, as_uint16(active));
+                end = select(end, b, as_uint16(active));
+                /* budget spent: the new list waits for the next pass */
+                active &= as_int16(tested < (uint16)RT_UNROLL_TESTS);
+                if (!any(active))
+                    break;
+                int16 ax;
+                float16 te2 = rt_voxel_exit16(&g, &r, cx, cy, cz, &ax);
+                axis = select(axis, ax, active);
+                te = select(te, te2, active);
+                limit =
+                    select(limit, select(rt_voxel_limit16(te2, r.tmax), r.tmax, r.any_hit), active);
             }
-            uint16 tested = stop - pos;
-            int16 more = as_int16(stop < end);
-            int16 fin = ~more & (as_int16(btri != (uint16)RT_NO_HIT) | (te >= r.tmax));
-            int16 go = ~more & ~fin;
-            int16 sx = go & (axis == 0), sy = go & (axis == 1), sz = go & (axis == 2);
-            cx += select((int16)0, select((int16)-1, (int16)1, r.dx > 0.0f), sx);
-            cy += select((int16)0, select((int16)-1, (int16)1, r.dy > 0.0f), sy);
-            cz += select((int16)0, select((int16)-1, (int16)1, r.dz > 0.0f), sz);
-            int16 out = (sx & ((cx < 0) | (cx >= g.dims[0]))) |
-                        (sy & ((cy < 0) | (cy >= g.dims[1]))) |
-                        (sz & ((cz < 0) | (cz >= g.dims[2])));
-            int16 done = fin | out;
-            uint16 next =
-                select(select((uint16)RT_NEXT_TRAVERSE, (uint16)RT_NEXT_INTERSECT, as_uint16(more)),
-                       (uint16)RT_NEXT_DONE, as_uint16(done));
+            next = select(next, (uint16)RT_NEXT_DONE, as_uint16(done));
             vstore16(next, 0, codes + i);
-            uint ts[16], nx[16], tri[16];
+            uint ts[16], nx[16], tri[16], vs[16];
             float ft[16], fu[16], fv[16];
             vstore16(tested, 0, ts);
             vstore16(next, 0, nx);
@@ -519,11 +581,14 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
             vstore16(cx, 0, wc[0]);
             vstore16(cy, 0, wc[1]);
             vstore16(cz, 0, wc[2]);
-            vstore16(as_int16(stop), 0, wc[3]);
+            vstore16(as_int16(pos), 0, wc[3]);
+            vstore16(visited, 0, vs);
             for (uint l = 0; l < 16u; ++l) {
                 global rt_hit *h = &hits[id[l]];
                 uint tests = hb[4][l] + ts[l];
                 h->tests = tests;
+                uint steps = h->steps + vs[l];
+                h->steps = steps;
                 if (tri[l] != hb[0][l] || as_uint(ft[l]) != hb[1][l]) {
                     h->tri = tri[l];
                     h->t = ft[l];
@@ -531,7 +596,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                     h->v = fv[l];
                 }
                 if (nx[l] == RT_NEXT_DONE) {
-                    rt_stream_maxima(maxima, h->steps, tests);
+                    rt_stream_maxima(maxima, steps, tests);
                 } else {
                     rt_walk w;
                     w.cx = wc[0][l];
@@ -541,16 +606,18 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                     walk[id[l]] = w;
                 }
                 tested_all += ts[l];
+                visited_all += vs[l];
             }
             done_all += (uint)popcount((uint)sluice_mask16(done));
         }
 #endif
         for (; i < hi; ++i) {
             uint next = rt_intersect_one(&g, rays, walk, hits, maxima, cell_start, cell_tris, tv,
-                                         ids[i], &tested_all);
+                                         ids[i], &tested_all, &visited_all);
             codes[i] = next;
             done_all += next == RT_NEXT_DONE;
         }
+        SLUICE_COUNT(0, visited_all);
         SLUICE_COUNT(1, tested_all);
         SLUICE_COUNT(2, done_all);
     }
