@@ -119,6 +119,17 @@ inline void rt_stream_maxima(global uint *maxima, uint steps, uint tests)
         atomic_max(&maxima[1], tests);
 }
 
+/* Ends a ray's pass: a finished ray adds its counts to the per-ray maxima
+ * (Purcell Table 5.2), a live one saves its walk for the next pass. */
+inline void rt_stream_retire(uint next, global uint *maxima, uint steps, uint tests,
+                             global rt_walk *walk, uint id, rt_walk w)
+{
+    if (next == RT_NEXT_DONE)
+        rt_stream_maxima(maxima, steps, tests);
+    else
+        walk[id] = w;
+}
+
 /* One ray of rt_setup (the records after the last block of 16). Returns
  * whether it enters the grid. */
 inline int rt_setup_one(const rt_grid_args *g, global const rt_ray *rays, global uint *codes,
@@ -236,14 +247,10 @@ inline uint rt_traverse_one(const rt_grid_args *g, global const rt_ray *rays, gl
     global rt_hit *h = &hits[id];
     uint steps = h->steps + visited;
     h->steps = steps;
-    if (next == RT_NEXT_DONE) {
-        rt_stream_maxima(maxima, steps, h->tests);
-    } else {
-        w.cx = c.x;
-        w.cy = c.y;
-        w.cz = c.z;
-        walk[id] = w;
-    }
+    w.cx = c.x;
+    w.cy = c.y;
+    w.cz = c.z;
+    rt_stream_retire(next, maxima, steps, h->tests, walk, id, w);
     *visited_out += visited;
     return next;
 }
@@ -316,16 +323,12 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
                 global rt_hit *h = &hits[id[l]];
                 uint steps = h->steps + vs[l];
                 h->steps = steps;
-                if (nx[l] == RT_NEXT_DONE) {
-                    rt_stream_maxima(maxima, steps, h->tests);
-                } else {
-                    rt_walk w;
-                    w.cx = wc[0][l];
-                    w.cy = wc[1][l];
-                    w.cz = wc[2][l];
-                    w.pos = (uint)wc[3][l];
-                    walk[id[l]] = w;
-                }
+                rt_walk w;
+                w.cx = wc[0][l];
+                w.cy = wc[1][l];
+                w.cz = wc[2][l];
+                w.pos = (uint)wc[3][l];
+                rt_stream_retire(nx[l], maxima, steps, h->tests, walk, id[l], w);
             }
             visited_all += vs[0] + vs[1] + vs[2] + vs[3] + vs[4] + vs[5] + vs[6] + vs[7] + vs[8] +
                            vs[9] + vs[10] + vs[11] + vs[12] + vs[13] + vs[14] + vs[15];
@@ -449,14 +452,10 @@ inline uint rt_intersect_one(const rt_grid_args *g, global const rt_ray *rays, g
         h->u = b.u;
         h->v = b.v;
     }
-    if (next == RT_NEXT_DONE) {
-        rt_stream_maxima(maxima, steps, tests);
-    } else {
-        w.cx = c.x;
-        w.cy = c.y;
-        w.cz = c.z;
-        walk[id] = w;
-    }
+    w.cx = c.x;
+    w.cy = c.y;
+    w.cz = c.z;
+    rt_stream_retire(next, maxima, steps, tests, walk, id, w);
     *tested_out += tested;
     *visited_out += visited;
     return next;
@@ -595,16 +594,12 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                     h->u = fu[l];
                     h->v = fv[l];
                 }
-                if (nx[l] == RT_NEXT_DONE) {
-                    rt_stream_maxima(maxima, steps, tests);
-                } else {
-                    rt_walk w;
-                    w.cx = wc[0][l];
-                    w.cy = wc[1][l];
-                    w.cz = wc[2][l];
-                    w.pos = (uint)wc[3][l];
-                    walk[id[l]] = w;
-                }
+                rt_walk w;
+                w.cx = wc[0][l];
+                w.cy = wc[1][l];
+                w.cz = wc[2][l];
+                w.pos = (uint)wc[3][l];
+                rt_stream_retire(nx[l], maxima, steps, tests, walk, id[l], w);
                 tested_all += ts[l];
                 visited_all += vs[l];
             }
