@@ -49,11 +49,18 @@ inline void rt_trace_one(const rt_grid_args *g, global const uint *cell_start,
  * stream mode's bit for bit. Lanes advance in lockstep, one voxel per round;
  * a lane whose voxel is empty, or whose ray is done, idles (masked). When all
  * active lanes are in one voxel (coherent rays in a small scene), its list
- * is read with scalar loads and its triangles broadcast, with no gathers. Loads of
+ * bounds are read with scalar loads. The lanes that test triangles are
+ * grouped by voxel: the lists of the first RT_GROUPS voxels are read with
+ * scalar loads and their triangles broadcast to the lanes in them, and only
+ * lanes left over gather a triangle each (RT_GROUPS 4 against 0: 18% faster
+ * on cornell, 16% on bunny, 512x512 primary rays, one process). Loads of
  * per-lane addresses are AVX-512 gathers where the compiler offers them. The
  * watertight intersector keeps the scalar loop (rt_trace_one). */
 #if !defined(RT_WATERTIGHT) && !defined(RT_FUSED_SCALAR)
 #define RT_PACKET 16
+#ifndef RT_GROUPS
+#define RT_GROUPS 4
+#endif
 
 #if defined(SLUICE_AVX512_) && __has_builtin(__builtin_ia32_gathersiv16sf) &&                      \
     __has_builtin(__builtin_ia32_gathersiv16si)
@@ -292,11 +299,22 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
         if (rt_any16(full)) {
             tests += as_uint16(select((int16)0, b - a, full));
             float16 limit = select(rt_voxel_limit16(te, P.tmax), P.tmax, P.any_hit);
-            if (uniform) {
-                for (uint k = (uint)a.s0, kb = (uint)b.s0; k < kb; ++k)
-                    rt_intersect16_one(tv, cell_tris[k], full, &P, limit);
-            } else {
-                int16 k = a, m = full;
+            /* lanes grouped by voxel (see above); a lane tests its list in
+             * order either way, so the hits do not depend on the grouping */
+            int16 m = full;
+            for (int grp = 0; grp < RT_GROUPS; ++grp) {
+                ushort pm = sluice_mask16(m);
+                int c0 = rt_first_lane(ci, pm);
+                int16 in = m & (ci == c0);
+                uint ka = (uint)rt_first_lane(a, pm), kb = (uint)rt_first_lane(b, pm);
+                for (uint k = ka; k < kb; ++k)
+                    rt_intersect16_one(tv, cell_tris[k], in, &P, limit);
+                m &= ~in;
+                if (!rt_any16(m))
+                    break;
+            }
+            if (rt_any16(m)) {
+                int16 k = a;
                 do {
                     int16 tri = rt_gather_i(cell_tris, k, m);
                     rt_intersect16(tv, tri, m, &P, limit);
