@@ -53,15 +53,24 @@ static sluice_status upload_scene(rt_tracer *t)
     if (st != SLUICE_OK)
         return st;
 
-    /* De-indexed vertices: the intersector reads one 36-byte record per
+    /* Triangle records: the intersector reads one 36-byte record per
      * triangle instead of three indices and three gathers (Purcell 4.2
-     * keeps vertices in a texture indexed by triangle, the same idea). */
+     * keeps vertices in a texture indexed by triangle, the same idea). For
+     * Moller-Trumbore they hold (v0, v1 - v0, v2 - v0), the edges rounded as
+     * the test would round them; for the watertight test the vertices
+     * (kernels/raytrace/rt_trace.cl). */
     float *tv = malloc((nt ? nt : 1) * 9 * sizeof *tv);
     if (!tv)
         return SLUICE_ERROR_OUT_OF_MEMORY;
-    for (size_t i = 0; i < nt; ++i)
-        for (int k = 0; k < 3; ++k)
-            memcpy(tv + 9 * i + 3 * k, pos + 3 * (size_t)idx[3 * i + k], 3 * sizeof *tv);
+    int edges = t->opt.intersector == RT_ISECT_MT;
+    for (size_t i = 0; i < nt; ++i) {
+        const float *v0 = pos + 3 * (size_t)idx[3 * i];
+        for (int k = 0; k < 3; ++k) {
+            const float *v = pos + 3 * (size_t)idx[3 * i + k];
+            for (int a = 0; a < 3; ++a)
+                tv[9 * i + 3 * k + a] = edges && k > 0 ? v[a] - v0[a] : v[a];
+        }
+    }
     st = upload(t, 36, nt, tv, &t->tri_vertices);
     free(tv);
     if (st != SLUICE_OK)

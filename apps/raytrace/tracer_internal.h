@@ -20,7 +20,7 @@ struct rt_tracer {
     /* scene data on the device */
     sluice_stream *positions;    /* float x3 per vertex */
     sluice_stream *indices;      /* uint x3 per triangle */
-    sluice_stream *tri_vertices; /* float x9 per triangle: the de-indexed vertices */
+    sluice_stream *tri_vertices; /* float x9 per triangle: v0, e1, e2 (or v0, v1, v2) */
     sluice_stream *normals;      /* float x3 per vertex (one zero record when none) */
     sluice_stream *tri_mat;      /* uint per triangle */
     sluice_stream *materials;    /* rt_material */

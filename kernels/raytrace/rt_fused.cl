@@ -172,10 +172,10 @@ __attribute__((always_inline)) inline void rt_intersect16_one(global const float
                                                               int16 m, rt_packet *P, float16 limit)
 {
     global const float *q = tv + 9u * (size_t)tri;
-    float3 a = vload3(0, q), b = vload3(1, q), c = vload3(2, q);
-    rt_intersect16_core((int16)(int)tri, m, P, limit, (float16)a.x, (float16)a.y, (float16)a.z,
-                        (float16)(b.x - a.x), (float16)(b.y - a.y), (float16)(b.z - a.z),
-                        (float16)(c.x - a.x), (float16)(c.y - a.y), (float16)(c.z - a.z));
+    /* v0, e1, e2 one float at a time: each is a broadcast load */
+    rt_intersect16_core((int16)(int)tri, m, P, limit, (float16)q[0], (float16)q[1], (float16)q[2],
+                        (float16)q[3], (float16)q[4], (float16)q[5], (float16)q[6], (float16)q[7],
+                        (float16)q[8]);
 }
 
 /* rt_intersect_tri (Moller-Trumbore) in the lanes where m is set. When all of
@@ -194,12 +194,12 @@ __attribute__((always_inline)) inline void rt_intersect16(global const float *tv
         v0x = rt_gather_f(tv, at, m);
         v0y = rt_gather_f(tv, at + 1, m);
         v0z = rt_gather_f(tv, at + 2, m);
-        e1x = rt_gather_f(tv, at + 3, m) - v0x;
-        e1y = rt_gather_f(tv, at + 4, m) - v0y;
-        e1z = rt_gather_f(tv, at + 5, m) - v0z;
-        e2x = rt_gather_f(tv, at + 6, m) - v0x;
-        e2y = rt_gather_f(tv, at + 7, m) - v0y;
-        e2z = rt_gather_f(tv, at + 8, m) - v0z;
+        e1x = rt_gather_f(tv, at + 3, m);
+        e1y = rt_gather_f(tv, at + 4, m);
+        e1z = rt_gather_f(tv, at + 5, m);
+        e2x = rt_gather_f(tv, at + 6, m);
+        e2y = rt_gather_f(tv, at + 7, m);
+        e2z = rt_gather_f(tv, at + 8, m);
     }
     rt_intersect16_core(tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
 }

@@ -136,10 +136,10 @@ inline rt_surface rt_surface_at(const rt_ray *ray, const rt_hit *h, global const
 {
     rt_surface s;
     float3 o = (float3)(ray->ox, ray->oy, ray->oz), d = (float3)(ray->dx, ray->dy, ray->dz);
-    global const float *v = tv + 9u * (size_t)h->tri;
-    float3 v0 = vload3(0, v), v1 = vload3(1, v), v2 = vload3(2, v);
+    float3 v0, e1, e2;
+    rt_tri_edges(tv, h->tri, &v0, &e1, &e2);
     s.p = o + d * h->t;
-    float3 ng = normalize(cross(v1 - v0, v2 - v0));
+    float3 ng = normalize(cross(e1, e2));
     s.front = dot(ng, d) < 0.0f;
     float3 n = ng;
 #ifdef RT_HAS_NORMALS
@@ -298,11 +298,12 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
                     lo = mid + 1u;
             }
             uint lt = area_tris[lo];
-            global const float *lv = tv + 9u * (size_t)lt;
-            float3 a = vload3(0, lv), b = vload3(1, lv), cc = vload3(2, lv);
+            float3 a, e1, e2;
+            rt_tri_edges(tv, lt, &a, &e1, &e2);
             float su = sqrt(u1);
-            float3 q = a * (1.0f - su) + b * (su * (1.0f - u2)) + cc * (su * u2);
-            float3 lnc = cross(b - a, cc - a);
+            /* uniform on the triangle (Shirley and Chiu's square-to-triangle map) */
+            float3 q = a + e1 * (su * (1.0f - u2)) + e2 * (su * u2);
+            float3 lnc = cross(e1, e2);
             float3 ln = normalize(lnc);
             rt_material lm = mats[tri_mat[lt]];
             float3 L = q - s.p;

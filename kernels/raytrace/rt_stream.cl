@@ -359,10 +359,8 @@ inline void rt_intersect_tri16(global const float *tv, uint16 triv, int16 m, con
         for (uint l = 0; l < 16u; ++l)
             f[k][l] = tv[at[l] + k];
     float16 v0x = vload16(0, f[0]), v0y = vload16(0, f[1]), v0z = vload16(0, f[2]);
-    float16 e1x = vload16(0, f[3]) - v0x, e1y = vload16(0, f[4]) - v0y,
-            e1z = vload16(0, f[5]) - v0z;
-    float16 e2x = vload16(0, f[6]) - v0x, e2y = vload16(0, f[7]) - v0y,
-            e2z = vload16(0, f[8]) - v0z;
+    float16 e1x = vload16(0, f[3]), e1y = vload16(0, f[4]), e1z = vload16(0, f[5]);
+    float16 e2x = vload16(0, f[6]), e2y = vload16(0, f[7]), e2z = vload16(0, f[8]);
     float16 pvx = r->dy * e2z - r->dz * e2y;
     float16 pvy = r->dz * e2x - r->dx * e2z;
     float16 pvz = r->dx * e2y - r->dy * e2x;

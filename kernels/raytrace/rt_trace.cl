@@ -10,6 +10,15 @@
  *
  * Floating point: contraction into fused multiply-adds is off, so every
  * kernel (and the plain C reference in the tests) rounds the same way.
+ *
+ * Triangle records (`tv`, 9 floats per triangle, de-indexed by the tracer):
+ * for Moller-Trumbore (v0, e1 = v1 - v0, e2 = v2 - v0), the edges computed
+ * once on the host with the same float subtraction the test would do, so
+ * the hits are unchanged and every test saves six subtractions and the
+ * shuffles around them (fused mode: 5-14% faster, 512x512 primary rays); for
+ * the watertight test (v0, v1, v2), whose no-leak guarantee needs the
+ * vertices exactly (v0 + e1 need not round to v1). rt_tri_edges reads
+ * either.
  */
 #include "sluice.cl"
 
@@ -183,18 +192,32 @@ inline float16 rt_voxel_limit16(float16 t_exit, float16 tmax)
 /* Ray-triangle intersection                                           */
 /* ------------------------------------------------------------------ */
 
-/* Tests triangle `tri` (vertices from the de-indexed vertex stream, 9 floats
- * per triangle) and keeps it in `best` when it is hit in [tmin, limit] and
- * nearer than what `best` holds. Two-sided. */
+/* Triangle `tri` of the triangle records as a vertex and two edges, in
+ * either layout (see the top of this file). */
+inline void rt_tri_edges(global const float *tv, uint tri, float3 *v0, float3 *e1, float3 *e2)
+{
+    global const float *p = tv + 9u * (size_t)tri;
+    *v0 = vload3(0, p);
+#ifdef RT_WATERTIGHT
+    *e1 = vload3(1, p) - *v0;
+    *e2 = vload3(2, p) - *v0;
+#else
+    *e1 = vload3(1, p);
+    *e2 = vload3(2, p);
+#endif
+}
+
+/* Tests triangle `tri` (from the triangle records, 9 floats per triangle)
+ * and keeps it in `best` when it is hit in [tmin, limit] and nearer than
+ * what `best` holds. Two-sided. */
 inline void rt_intersect_tri(global const float *tv, uint tri, const rt_rayp *r, float limit,
                              rt_best *best)
 {
     global const float *p = tv + 9u * (size_t)tri;
-    float3 v0 = vload3(0, p), v1 = vload3(1, p), v2 = vload3(2, p);
 #ifndef RT_WATERTIGHT
     /* Moller and Trumbore 1997: the barycentrics and t by Cramer's rule, as
-     * in Purcell's intersector (Fig. 3.2) with the edges formed here. */
-    float3 e1 = v1 - v0, e2 = v2 - v0;
+     * in Purcell's intersector (Fig. 3.2), with the edges from the record. */
+    float3 v0 = vload3(0, p), e1 = vload3(1, p), e2 = vload3(2, p);
     float3 pv = rt_cross(r->d, e2);
     float det = rt_dot(e1, pv);
     if (det == 0.0f)
@@ -216,6 +239,7 @@ inline void rt_intersect_tri(global const float *tv, uint tri, const rt_rayp *r,
         best->v = v;
     }
 #else
+    float3 v0 = vload3(0, p), v1 = vload3(1, p), v2 = vload3(2, p);
     /* Woop, Benthin and Wald 2013: edge functions of the sheared triangle.
      * An edge shared by two triangles gives the same value (with opposite
      * sign) in both, so a ray through it hits at least one: no leaks. */
