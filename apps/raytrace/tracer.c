@@ -213,9 +213,9 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     SKIP(!ss->has_normals, "normal interpolation (no vertex normals)");
     SKIP(1, "empty voxels (never sent to the intersector)");
 #undef SKIP
-    static const char *const names[] = {"rt_types.h", "rt_trace.cl", "rt_stream.cl", "rt_fused.cl",
-                                        "rt_shade.cl"};
-    sluice_status st = rt_program_create(t->ctx, names, 5, opts, &t->program);
+    static const char *const names[] = {"rt_types.h",   "rt_trace.cl", "rt_lanes.cl",
+                                        "rt_stream.cl", "rt_fused.cl", "rt_shade.cl"};
+    sluice_status st = rt_program_create(t->ctx, names, 6, opts, &t->program);
     if (st == SLUICE_OK)
         st = sluice_program_build(t->program);
     if (st != SLUICE_OK) {

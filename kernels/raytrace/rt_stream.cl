@@ -31,82 +31,18 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-/* 16 rays in lanes, for the kernels' blocks of 16 records: the same fields
- * and the same arithmetic as rt_prepare (rt_trace.cl), lane by lane, so a
- * ray's voxels do not depend on which path handled it. */
-typedef struct rt_ray16 {
-    float16 ox, oy, oz, dx, dy, dz;
-    float16 ix, iy, iz; /* 1 / d; 0 where d is 0 */
-    float16 tmin, tmax;
-    int16 any_hit; /* -1 where RT_FLAG_ANY_HIT */
-} rt_ray16;
+/* Blocks of 16 rays run in lanes as rt_packet (rt_lanes.cl). */
 
-inline void rt_ray16_load(global const rt_ray *rays, uint16 idv, rt_ray16 *r)
+/* The walk state (rt_walk: cx, cy, cz, pos) of the rays ids, gathered. */
+inline void rt_walk16_load(global const rt_walk *walk, uint16 ids, int16 *cx, int16 *cy, int16 *cz,
+                           uint16 *pos)
 {
-    uint id[16];
-    float f[8][16];
-    uint fl[16];
-    vstore16(idv, 0, id);
-    for (uint l = 0; l < 16u; ++l) {
-        global const rt_ray *p = &rays[id[l]];
-        f[0][l] = p->ox;
-        f[1][l] = p->oy;
-        f[2][l] = p->oz;
-        f[3][l] = p->dx;
-        f[4][l] = p->dy;
-        f[5][l] = p->dz;
-        f[6][l] = p->tmin;
-        f[7][l] = p->tmax;
-        fl[l] = p->flags;
-    }
-    r->any_hit = as_int16((vload16(0, fl) & (uint16)RT_FLAG_ANY_HIT) != (uint16)0u);
-    r->ox = vload16(0, f[0]);
-    r->oy = vload16(0, f[1]);
-    r->oz = vload16(0, f[2]);
-    r->dx = vload16(0, f[3]);
-    r->dy = vload16(0, f[4]);
-    r->dz = vload16(0, f[5]);
-    r->tmin = vload16(0, f[6]);
-    r->tmax = vload16(0, f[7]);
-    r->ix = select((float16)0.0f, 1.0f / r->dx, r->dx != 0.0f);
-    r->iy = select((float16)0.0f, 1.0f / r->dy, r->dy != 0.0f);
-    r->iz = select((float16)0.0f, 1.0f / r->dz, r->dz != 0.0f);
-}
-
-/* p[idx] in the lanes of m (others 0). Branch-free: the other lanes read
- * p[0], so the loop is plain loads the compiler may turn into a gather. */
-inline uint16 rt_gather16(global const uint *p, uint16 idx, int16 m)
-{
-    uint a[16], out[16];
-    vstore16(select((uint16)0u, idx, as_uint16(m)), 0, a);
-    for (uint l = 0; l < 16u; ++l)
-        out[l] = p[a[l]];
-    return select((uint16)0u, vload16(0, out), as_uint16(m));
-}
-
-/* rt_voxel_exit in 16 lanes: the exit parameter and the axis (0, 1, 2). */
-inline float16 rt_voxel_exit16(const rt_grid_args *g, const rt_ray16 *r, int16 cx, int16 cy,
-                               int16 cz, int16 *axis)
-{
-    float16 bx =
-        g->lo[0] + convert_float16(cx + select((int16)0, (int16)1, r->dx > 0.0f)) * g->cell[0];
-    float16 by =
-        g->lo[1] + convert_float16(cy + select((int16)0, (int16)1, r->dy > 0.0f)) * g->cell[1];
-    float16 bz =
-        g->lo[2] + convert_float16(cz + select((int16)0, (int16)1, r->dz > 0.0f)) * g->cell[2];
-    float16 tx = select((float16)INFINITY, (bx - r->ox) * r->ix, r->dx != 0.0f);
-    float16 ty = select((float16)INFINITY, (by - r->oy) * r->iy, r->dy != 0.0f);
-    float16 tz = select((float16)INFINITY, (bz - r->oz) * r->iz, r->dz != 0.0f);
-    int16 a = (int16)0;
-    float16 t = tx;
-    int16 y = ty < t;
-    t = select(t, ty, y);
-    a = select(a, (int16)1, y);
-    int16 z = tz < t;
-    t = select(t, tz, z);
-    a = select(a, (int16)2, z);
-    *axis = a;
-    return t;
+    global const uint *w = (global const uint *)walk;
+    int16 at = as_int16(ids) * 4;
+    *cx = rt_gather_i(w, at, (int16)-1);
+    *cy = rt_gather_i(w, at + 1, (int16)-1);
+    *cz = rt_gather_i(w, at + 2, (int16)-1);
+    *pos = as_uint16(rt_gather_i(w, at + 3, (int16)-1));
 }
 
 /* A ray is done: keep the largest per-ray step and test counts (read first,
@@ -167,8 +103,8 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
             (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
         uint i = lo;
         for (; i + 16u <= hi; i += 16u) {
-            rt_ray16 r;
-            rt_ray16_load(rays, (uint16)i + lane, &r);
+            rt_packet r;
+            rt_packet_load(rays, as_int16((uint16)i + lane), (int16)-1, &r);
             /* rt_grid_enter, lane by lane */
             float16 t0 = r.tmin, t1 = r.tmax;
             int16 miss = (int16)0;
@@ -266,30 +202,23 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
         uint i = lo, visited_all = 0u, done_all = 0u;
         for (; i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
-            rt_ray16 r;
-            rt_ray16_load(rays, idv, &r);
+            rt_packet r;
+            rt_packet_load(rays, as_int16(idv), (int16)-1, &r);
             uint id[16];
             vstore16(idv, 0, id);
             int wc[4][16];
-            for (uint l = 0; l < 16u; ++l) {
-                rt_walk w = walk[id[l]];
-                wc[0][l] = w.cx;
-                wc[1][l] = w.cy;
-                wc[2][l] = w.cz;
-                wc[3][l] = (int)w.pos;
-            }
-            int16 cx = vload16(0, wc[0]), cy = vload16(0, wc[1]), cz = vload16(0, wc[2]);
-            uint16 pos = as_uint16(vload16(0, wc[3]));
+            int16 cx, cy, cz;
+            uint16 pos;
+            rt_walk16_load(walk, idv, &cx, &cy, &cz, &pos);
             int16 active = (int16)-1, done = (int16)0, found = (int16)0;
             uint16 visited = (uint16)0u;
             for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
                 if (!any(active))
                     break;
                 visited += as_uint16(active) & (uint16)1u;
-                uint16 ci = as_uint16(cx) +
-                            (uint)g.dims[0] * (as_uint16(cy) + (uint)g.dims[1] * as_uint16(cz));
-                uint16 a = rt_gather16(cell_start, ci, active);
-                uint16 b = rt_gather16(cell_start, ci + 1u, active);
+                int16 ci = rt_cell_index16(&g, cx, cy, cz);
+                uint16 a = as_uint16(rt_gather_i(cell_start, ci, active));
+                uint16 b = as_uint16(rt_gather_i(cell_start, ci + 1, active));
                 int16 f = active & as_int16(a < b);
                 pos = select(pos, a, as_uint16(f));
                 found |= f;
@@ -344,45 +273,6 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
         SLUICE_COUNT(2, done_all);
     }
 }
-
-#ifndef RT_WATERTIGHT
-/* rt_intersect_tri (Moller-Trumbore) in the lanes of m: triangle tri[l]
- * against ray l, the same operations in the same order, so a lane finds
- * exactly what the scalar test finds. */
-inline void rt_intersect_tri16(global const float *tv, uint16 triv, int16 m, const rt_ray16 *r,
-                               float16 limit, uint16 *btri, float16 *bt, float16 *bu, float16 *bv)
-{
-    uint at[16];
-    float f[9][16];
-    vstore16(select((uint16)0u, triv, as_uint16(m)) * 9u, 0, at);
-    for (uint k = 0; k < 9u; ++k)
-        for (uint l = 0; l < 16u; ++l)
-            f[k][l] = tv[at[l] + k];
-    float16 v0x = vload16(0, f[0]), v0y = vload16(0, f[1]), v0z = vload16(0, f[2]);
-    float16 e1x = vload16(0, f[3]), e1y = vload16(0, f[4]), e1z = vload16(0, f[5]);
-    float16 e2x = vload16(0, f[6]), e2y = vload16(0, f[7]), e2z = vload16(0, f[8]);
-    float16 pvx = r->dy * e2z - r->dz * e2y;
-    float16 pvy = r->dz * e2x - r->dx * e2z;
-    float16 pvz = r->dx * e2y - r->dy * e2x;
-    float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
-    int16 ok = m & (det != 0.0f);
-    float16 inv = 1.0f / det;
-    float16 sx = r->ox - v0x, sy = r->oy - v0y, sz = r->oz - v0z;
-    float16 u = (sx * pvx + sy * pvy + sz * pvz) * inv;
-    ok &= ~((u < 0.0f) | (u > 1.0f));
-    float16 qx = sy * e1z - sz * e1y;
-    float16 qy = sz * e1x - sx * e1z;
-    float16 qz = sx * e1y - sy * e1x;
-    float16 v = (r->dx * qx + r->dy * qy + r->dz * qz) * inv;
-    ok &= ~((v < 0.0f) | (u + v > 1.0f));
-    float16 t = (e2x * qx + e2y * qy + e2z * qz) * inv;
-    ok &= (t >= r->tmin) & (t <= limit) & (t < *bt);
-    *btri = select(*btri, triv, as_uint16(ok));
-    *bt = select(*bt, t, ok);
-    *bu = select(*bu, u, ok);
-    *bv = select(*bv, v, ok);
-}
-#endif
 
 /* One ray of rt_intersect (the records after the last block of 16, and
  * every ray with the watertight test): up to RT_UNROLL_TESTS triangles, over
@@ -479,36 +369,30 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
 #ifndef RT_WATERTIGHT
         for (; i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
-            rt_ray16 r;
-            rt_ray16_load(rays, idv, &r);
+            rt_packet r;
+            rt_packet_load(rays, as_int16(idv), (int16)-1, &r);
             uint id[16];
             vstore16(idv, 0, id);
             int wc[4][16];
-            uint hb[5][16];
-            for (uint l = 0; l < 16u; ++l) {
-                rt_walk w = walk[id[l]];
-                wc[0][l] = w.cx;
-                wc[1][l] = w.cy;
-                wc[2][l] = w.cz;
-                wc[3][l] = (int)w.pos;
-                global const rt_hit *h = &hits[id[l]];
-                hb[0][l] = h->tri;
-                hb[1][l] = as_uint(h->t);
-                hb[2][l] = as_uint(h->u);
-                hb[3][l] = as_uint(h->v);
-                hb[4][l] = h->tests;
-            }
-            int16 cx = vload16(0, wc[0]), cy = vload16(0, wc[1]), cz = vload16(0, wc[2]);
-            uint16 pos = as_uint16(vload16(0, wc[3]));
-            uint16 ci =
-                as_uint16(cx) + (uint)g.dims[0] * (as_uint16(cy) + (uint)g.dims[1] * as_uint16(cz));
-            uint16 end = rt_gather16(cell_start, ci + 1u, (int16)-1);
+            int16 cx, cy, cz;
+            uint16 pos;
+            rt_walk16_load(walk, idv, &cx, &cy, &cz, &pos);
+            /* the best hit so far and the tests done (rt_hit: tri, t, u, v,
+             * steps, tests) */
+            global const uint *hw = (global const uint *)hits;
+            int16 hat = as_int16(idv) * (int)(sizeof(rt_hit) / sizeof(uint));
+            r.tri = rt_gather_i(hw, hat, (int16)-1);
+            r.t = as_float16(rt_gather_i(hw, hat + 1, (int16)-1));
+            r.u = as_float16(rt_gather_i(hw, hat + 2, (int16)-1));
+            r.v = as_float16(rt_gather_i(hw, hat + 3, (int16)-1));
+            uint16 tests0 = as_uint16(rt_gather_i(hw, hat + 5, (int16)-1));
+            int16 tri0 = r.tri;
+            float16 t0 = r.t;
+            int16 ci = rt_cell_index16(&g, cx, cy, cz);
+            uint16 end = as_uint16(rt_gather_i(cell_start, ci + 1, (int16)-1));
             int16 axis;
             float16 te = rt_voxel_exit16(&g, &r, cx, cy, cz, &axis);
             float16 limit = select(rt_voxel_limit16(te, r.tmax), r.tmax, r.any_hit);
-            uint16 btri = vload16(0, hb[0]), bt0 = vload16(0, hb[1]);
-            float16 bt = as_float16(bt0), bu = as_float16(vload16(0, hb[2])),
-                    bv = as_float16(vload16(0, hb[3]));
             uint16 tested = (uint16)0u, visited = (uint16)0u;
             uint16 next = (uint16)RT_NEXT_INTERSECT;
             int16 active = (int16)-1, done = (int16)0;
@@ -516,20 +400,14 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                 /* the current voxel's list, as far as the budget goes */
                 uint16 stop = min(end, pos + ((uint16)RT_UNROLL_TESTS - tested));
                 stop = select(pos, stop, as_uint16(active));
-                for (uint j = 0; j < (uint)RT_UNROLL_TESTS; ++j) {
-                    uint16 at = pos + j;
-                    int16 m = as_int16(at < stop);
-                    if (!any(m))
-                        break;
-                    uint16 tri = rt_gather16(cell_tris, at, m);
-                    rt_intersect_tri16(tv, tri, m, &r, limit, &btri, &bt, &bu, &bv);
-                }
+                rt_intersect16_lists(tv, cell_tris, as_int16(pos), as_int16(stop), active, &r,
+                                     limit);
                 tested += stop - pos;
                 pos = stop;
                 /* budget spent inside the list: next intersect pass */
                 active &= ~as_int16(stop < end);
                 /* list done: a hit finishes the ray, else it steps on */
-                int16 fin = active & (as_int16(btri != (uint16)RT_NO_HIT) | (te >= r.tmax));
+                int16 fin = active & ((r.tri != -1) | (te >= r.tmax));
                 int16 go = active & ~fin;
                 int16 sx = go & (axis == 0), sy = go & (axis == 1), sz = go & (axis == 2);
                 cx += select((int16)0, select((int16)-1, (int16)1, r.dx > 0.0f), sx);
@@ -544,10 +422,9 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                     break;
                 /* the next voxel: an empty one goes to traversal (which
                  * enters it); a non-empty one is entered here */
-                ci = as_uint16(cx) +
-                     (uint)g.dims[0] * (as_uint16(cy) + (uint)g.dims[1] * as_uint16(cz));
-                uint16 a = rt_gather16(cell_start, ci, active);
-                uint16 b = rt_gather16(cell_start, ci + 1u, active);
+                ci = rt_cell_index16(&g, cx, cy, cz);
+                uint16 a = as_uint16(rt_gather_i(cell_start, ci, active));
+                uint16 b = as_uint16(rt_gather_i(cell_start, ci + 1, active));
                 int16 empty = active & as_int16(a >= b);
                 next = select(next, (uint16)RT_NEXT_TRAVERSE, as_uint16(empty));
                 active &= ~empty;
@@ -567,14 +444,16 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
             }
             next = select(next, (uint16)RT_NEXT_DONE, as_uint16(done));
             vstore16(next, 0, codes + i);
-            uint ts[16], nx[16], tri[16], vs[16];
+            uint ts[16], nx[16], tri[16], vs[16], tests[16], changed[16];
             float ft[16], fu[16], fv[16];
             vstore16(tested, 0, ts);
+            vstore16(tests0 + tested, 0, tests);
             vstore16(next, 0, nx);
-            vstore16(btri, 0, tri);
-            vstore16(bt, 0, ft);
-            vstore16(bu, 0, fu);
-            vstore16(bv, 0, fv);
+            vstore16(as_uint16(r.tri), 0, tri);
+            vstore16(r.t, 0, ft);
+            vstore16(r.u, 0, fu);
+            vstore16(r.v, 0, fv);
+            vstore16(as_uint16((r.tri != tri0) | (as_int16(r.t) != as_int16(t0))), 0, changed);
             vstore16(cx, 0, wc[0]);
             vstore16(cy, 0, wc[1]);
             vstore16(cz, 0, wc[2]);
@@ -582,11 +461,10 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
             vstore16(visited, 0, vs);
             for (uint l = 0; l < 16u; ++l) {
                 global rt_hit *h = &hits[id[l]];
-                uint tests = hb[4][l] + ts[l];
-                h->tests = tests;
+                h->tests = tests[l];
                 uint steps = h->steps + vs[l];
                 h->steps = steps;
-                if (tri[l] != hb[0][l] || as_uint(ft[l]) != hb[1][l]) {
+                if (changed[l]) {
                     h->tri = tri[l];
                     h->t = ft[l];
                     h->u = fu[l];
@@ -597,7 +475,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                 w.cy = wc[1][l];
                 w.cz = wc[2][l];
                 w.pos = (uint)wc[3][l];
-                rt_stream_retire(nx[l], maxima, steps, tests, walk, id[l], w);
+                rt_stream_retire(nx[l], maxima, steps, tests[l], walk, id[l], w);
                 tested_all += ts[l];
                 visited_all += vs[l];
             }
