@@ -532,9 +532,11 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
 
     /* the grid: plain C build (also the C tracer's) and the device build */
     const sluice_scene_stats *ss = sluice_scene_statistics(sc);
-    /* The tracer's default resolution (rt_grid_auto_min_dim), for all peers
+    /* The tracer's default resolution (rt_grid_auto_min_dim_edge), for all peers
      * that use a grid. */
-    unsigned min_dim = rt_grid_auto_min_dim(ss->bounds_min, ss->bounds_max, ss->triangles);
+    unsigned min_dim = rt_grid_auto_min_dim_edge(
+        ss->bounds_min, ss->bounds_max, ss->triangles,
+        rt_grid_edge_quartile(sluice_scene_positions(sc), sluice_scene_indices(sc), ss->triangles));
     res->min_dim = min_dim;
     rt_grid_desc desc;
     if (rt_grid_choose(ss->bounds_min, ss->bounds_max, min_dim, &desc, err, sizeof err) !=
@@ -939,7 +941,8 @@ int main(int argc, char **argv)
                 "\"primary, through the pixel centres, the scene's camera, 8x8-tile order\", "
                 "\"reps\": %u, \"timing\": \"best of reps after a warm-up; Sluice: trace only, "
                 "rays and hits in device streams\", \"grid_min_dim\": \"auto "
-                "(rt_grid_auto_min_dim, per scene)\", \"quick\": %s},\n",
+                "(rt_grid_auto_min_dim_edge with rt_grid_edge_quartile, per scene)\", \"quick\": "
+                "%s},\n",
                 size, size, reps, quick ? "true" : "false");
 #ifdef HAVE_EMBREE
         fprintf(f,

@@ -793,6 +793,29 @@ static void test_auto_min_dim(void)
     const float bad[3] = {1, NAN, 1};
     CHECK(rt_grid_auto_min_dim(lo, bad, 100) == RT_GRID_DEFAULT_MIN_DIM, "NaN bounds");
     CHECK(rt_grid_auto_min_dim(lo, cube, 0) == RT_GRID_DEFAULT_MIN_DIM, "no triangles");
+
+    /* a floor on the voxel edge: big triangles coarsen the grid, small ones
+     * leave the density rule alone */
+    d = rt_grid_auto_min_dim_edge(lo, cube, 1000, 0.25);
+    CHECK(d == 4, "edge floor 0.25: min dim %u, expected 4", d);
+    d = rt_grid_auto_min_dim_edge(lo, cube, 1000, 0.01);
+    CHECK(d == 17, "edge floor 0.01: min dim %u, expected 17", d);
+    d = rt_grid_auto_min_dim_edge(lo, cube, 1000, 0.0);
+    CHECK(d == 17, "no edge floor: min dim %u, expected 17", d);
+    d = rt_grid_auto_min_dim_edge(lo, cube, 1000, NAN);
+    CHECK(d == 17, "NaN edge floor: min dim %u, expected 17", d);
+
+    /* edge quartile: right triangles with legs 1 and 2 (edges 1, 2, sqrt 5):
+     * the lower quartile of {1, 2, 2.24} x N is 1; a non-finite vertex's
+     * edges are left out; no triangles give 0 */
+    const float pos[] = {0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 5, 1, 0, 5, 0, 2, 5, 0, 0, INFINITY};
+    const uint32_t idx[] = {0, 1, 2, 3, 4, 5, 6, 6, 6};
+    double q = rt_grid_edge_quartile(pos, idx, 2);
+    CHECK(q == 1.0, "edge quartile %g, expected 1", q);
+    q = rt_grid_edge_quartile(pos, idx, 3);
+    CHECK(q == 1.0, "edge quartile with a non-finite triangle %g, expected 1", q);
+    CHECK(rt_grid_edge_quartile(pos, idx, 0) == 0.0, "no triangles");
+    CHECK(rt_grid_edge_quartile(pos, idx + 6, 1) == 0.0, "only non-finite edges");
 }
 
 int main(int argc, char **argv)

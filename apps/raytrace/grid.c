@@ -108,6 +108,45 @@ sluice_status rt_grid_choose(const float lo[3], const float hi[3], unsigned min_
 
 unsigned rt_grid_auto_min_dim(const float lo[3], const float hi[3], size_t triangles)
 {
+    return rt_grid_auto_min_dim_edge(lo, hi, triangles, 0.0);
+}
+
+static int compare_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+double rt_grid_edge_quartile(const float *positions, const uint32_t *indices, size_t triangles)
+{
+    enum { SAMPLE = 4096 };
+    if (!positions || !indices || triangles == 0)
+        return 0.0;
+    size_t stride = (triangles + SAMPLE - 1) / SAMPLE, n = 0;
+    double *e = malloc(3 * SAMPLE * sizeof *e);
+    if (!e)
+        return 0.0;
+    for (size_t t = 0; t < triangles; t += stride)
+        for (int k = 0; k < 3; ++k) {
+            const float *a = positions + 3 * (size_t)indices[3 * t + k];
+            const float *b = positions + 3 * (size_t)indices[3 * t + (k + 1) % 3];
+            double dx = (double)a[0] - b[0], dy = (double)a[1] - b[1], dz = (double)a[2] - b[2];
+            double len = sqrt(dx * dx + dy * dy + dz * dz);
+            if (isfinite(len))
+                e[n++] = len;
+        }
+    double q = 0.0;
+    if (n > 0) {
+        qsort(e, n, sizeof *e, compare_double);
+        q = e[n / 4];
+    }
+    free(e);
+    return q;
+}
+
+unsigned rt_grid_auto_min_dim_edge(const float lo[3], const float hi[3], size_t triangles,
+                                   double min_edge)
+{
     if (!lo || !hi || triangles == 0)
         return RT_GRID_DEFAULT_MIN_DIM;
     double ext[3], max_ext = 0.0;
@@ -135,6 +174,8 @@ unsigned rt_grid_auto_min_dim(const float lo[3], const float hi[3], size_t trian
         cells = (double)RT_GRID_AUTO_MAX_CELLS;
     /* voxels of edge e: measure / e^axes = cells */
     double edge = pow(measure / cells, 1.0 / (double)axes);
+    if (isfinite(min_edge) && min_edge > edge)
+        edge = min_edge;
     double d = edge > 0.0 ? floor(shortest / edge + 0.5) : 1.0;
     if (!(d >= 1.0))
         d = 1.0;

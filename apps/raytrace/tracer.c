@@ -139,7 +139,10 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
     size_t nt = sluice_scene_triangle_count(t->scene);
     unsigned min_dim = t->opt.grid_min_dim;
     if (min_dim == RT_GRID_AUTO_MIN_DIM)
-        min_dim = rt_grid_auto_min_dim(ss->bounds_min, ss->bounds_max, nt);
+        min_dim =
+            rt_grid_auto_min_dim_edge(ss->bounds_min, ss->bounds_max, nt,
+                                      rt_grid_edge_quartile(sluice_scene_positions(t->scene),
+                                                            sluice_scene_indices(t->scene), nt));
     sluice_status st =
         rt_grid_choose(ss->bounds_min, ss->bounds_max, min_dim, &desc, err, err_size);
     if (st != SLUICE_OK)
