@@ -103,7 +103,8 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
         ushort am = sluice_mask16(active);
         int ci0 = rt_first_lane(ci, am);
         int16 a, b;
-        if (sluice_mask16(active & (ci == ci0)) == am) {
+        int uniform = sluice_mask16(active & (ci == ci0)) == am;
+        if (uniform) {
             a = (int16)(int)cell_start[ci0];
             b = (int16)(int)cell_start[ci0 + 1];
         } else {
@@ -116,7 +117,12 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
         if (rt_any16(full)) {
             tests += as_uint16(select((int16)0, b - a, full));
             float16 limit = select(rt_voxel_limit16(te, P.tmax), P.tmax, P.any_hit);
-            rt_intersect16_lists(tv, cell_tris, a, b, full, &P, limit);
+            /* one voxel: its list straight (no grouping; 4-6% on cornell) */
+            if (uniform)
+                for (uint k = (uint)a.s0, kb = (uint)b.s0; k < kb; ++k)
+                    rt_intersect16_one(tv, cell_tris[k], full, &P, limit);
+            else
+                rt_intersect16_lists(tv, cell_tris, a, b, full, &P, limit);
         }
         int16 done = (P.tri != -1) | (te >= P.tmax);
         int16 go = active & ~done;
