@@ -33,16 +33,30 @@
 
 /* Blocks of 16 rays run in lanes as rt_packet (rt_lanes.cl). */
 
-/* The walk state (rt_walk: cx, cy, cz, pos) of the rays ids, gathered. */
-inline void rt_walk16_load(global const rt_walk *walk, uint16 ids, int16 *cx, int16 *cy, int16 *cz,
-                           uint16 *pos)
+/* The rays ids and their walk state (rt_walk: cx, cy, cz, pos), gathered. */
+inline void rt_walk16_load(global const rt_ray *rays, global const rt_walk *walk, uint16 ids,
+                           rt_packet *r, int16 *cx, int16 *cy, int16 *cz, uint16 *pos)
 {
+    rt_packet_load(rays, as_int16(ids), (int16)-1, r);
     global const uint *w = (global const uint *)walk;
     int16 at = as_int16(ids) * 4;
     *cx = rt_gather_i(w, at, (int16)-1);
     *cy = rt_gather_i(w, at + 1, (int16)-1);
     *cz = rt_gather_i(w, at + 2, (int16)-1);
     *pos = as_uint16(rt_gather_i(w, at + 3, (int16)-1));
+}
+
+/* rt_voxel_step in the lanes of go, through face `axis`: returns the lanes
+ * that left the grid. */
+inline int16 rt_step16(const rt_grid_args *g, const rt_packet *r, int16 go, int16 axis, int16 *cx,
+                       int16 *cy, int16 *cz)
+{
+    int16 sx = go & (axis == 0), sy = go & (axis == 1), sz = go & (axis == 2);
+    *cx += select((int16)0, select((int16)-1, (int16)1, r->dx > 0.0f), sx);
+    *cy += select((int16)0, select((int16)-1, (int16)1, r->dy > 0.0f), sy);
+    *cz += select((int16)0, select((int16)-1, (int16)1, r->dz > 0.0f), sz);
+    return (sx & ((*cx < 0) | (*cx >= g->dims[0]))) | (sy & ((*cy < 0) | (*cy >= g->dims[1]))) |
+           (sz & ((*cz < 0) | (*cz >= g->dims[2])));
 }
 
 /* A ray is done: keep the largest per-ray step and test counts (read first,
@@ -202,14 +216,13 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
         uint i = lo, visited_all = 0u, done_all = 0u;
         for (; i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
-            rt_packet r;
-            rt_packet_load(rays, as_int16(idv), (int16)-1, &r);
             uint id[16];
             vstore16(idv, 0, id);
             int wc[4][16];
+            rt_packet r;
             int16 cx, cy, cz;
             uint16 pos;
-            rt_walk16_load(walk, idv, &cx, &cy, &cz, &pos);
+            rt_walk16_load(rays, walk, idv, &r, &cx, &cy, &cz, &pos);
             int16 active = (int16)-1, done = (int16)0, found = (int16)0;
             uint16 visited = (uint16)0u;
             for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
@@ -227,13 +240,7 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
                 float16 te = rt_voxel_exit16(&g, &r, cx, cy, cz, &axis);
                 int16 leave = active & (te >= r.tmax);
                 int16 go = active & ~leave;
-                int16 sx = go & (axis == 0), sy = go & (axis == 1), sz = go & (axis == 2);
-                cx += select((int16)0, select((int16)-1, (int16)1, r.dx > 0.0f), sx);
-                cy += select((int16)0, select((int16)-1, (int16)1, r.dy > 0.0f), sy);
-                cz += select((int16)0, select((int16)-1, (int16)1, r.dz > 0.0f), sz);
-                int16 out = (sx & ((cx < 0) | (cx >= g.dims[0]))) |
-                            (sy & ((cy < 0) | (cy >= g.dims[1]))) |
-                            (sz & ((cz < 0) | (cz >= g.dims[2])));
+                int16 out = rt_step16(&g, &r, go, axis, &cx, &cy, &cz);
                 done |= leave | out;
                 active &= ~(leave | out);
             }
@@ -369,14 +376,13 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
 #ifndef RT_WATERTIGHT
         for (; i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
-            rt_packet r;
-            rt_packet_load(rays, as_int16(idv), (int16)-1, &r);
             uint id[16];
             vstore16(idv, 0, id);
             int wc[4][16];
+            rt_packet r;
             int16 cx, cy, cz;
             uint16 pos;
-            rt_walk16_load(walk, idv, &cx, &cy, &cz, &pos);
+            rt_walk16_load(rays, walk, idv, &r, &cx, &cy, &cz, &pos);
             /* the best hit so far and the tests done (rt_hit: tri, t, u, v,
              * steps, tests) */
             global const uint *hw = (global const uint *)hits;
@@ -409,13 +415,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                 /* list done: a hit finishes the ray, else it steps on */
                 int16 fin = active & ((r.tri != -1) | (te >= r.tmax));
                 int16 go = active & ~fin;
-                int16 sx = go & (axis == 0), sy = go & (axis == 1), sz = go & (axis == 2);
-                cx += select((int16)0, select((int16)-1, (int16)1, r.dx > 0.0f), sx);
-                cy += select((int16)0, select((int16)-1, (int16)1, r.dy > 0.0f), sy);
-                cz += select((int16)0, select((int16)-1, (int16)1, r.dz > 0.0f), sz);
-                int16 out = (sx & ((cx < 0) | (cx >= g.dims[0]))) |
-                            (sy & ((cy < 0) | (cy >= g.dims[1]))) |
-                            (sz & ((cz < 0) | (cz >= g.dims[2])));
+                int16 out = rt_step16(&g, &r, go, axis, &cx, &cy, &cz);
                 done |= fin | out;
                 active &= ~(fin | out);
                 if (!any(active))
