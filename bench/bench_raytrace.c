@@ -32,6 +32,7 @@
  */
 #include "bench_args.h"
 #include "grid.h"
+#include "mt_ref.h"
 #include "render.h"
 #include "scene.h"
 #include "tracer.h"
@@ -137,41 +138,15 @@ typedef struct cbest {
     float t, u, v;
 } cbest;
 
-static float dot3(const float a[3], const float b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const float a[3], const float b[3], float out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static void c_intersect(const float *tv, uint32_t tri, const float o[3], const float d[3],
-                        float tmin, float limit, cbest *best)
+__attribute__((always_inline)) static inline void c_intersect(const float *tv, uint32_t tri,
+                                                              const float o[3], const float d[3],
+                                                              float tmin, float limit, cbest *best)
 {
     const float *p = tv + 9 * (size_t)tri;
     float e1[3] = {p[3] - p[0], p[4] - p[1], p[5] - p[2]};
     float e2[3] = {p[6] - p[0], p[7] - p[1], p[8] - p[2]};
-    float pv[3];
-    cross3(d, e2, pv);
-    float det = dot3(e1, pv);
-    if (det == 0.0f)
-        return;
-    float inv = 1.0f / det;
-    float s[3] = {o[0] - p[0], o[1] - p[1], o[2] - p[2]};
-    float u = dot3(s, pv) * inv;
-    if (u < 0.0f || u > 1.0f)
-        return;
-    float q[3];
-    cross3(s, e1, q);
-    float v = dot3(d, q) * inv;
-    if (v < 0.0f || u + v > 1.0f)
-        return;
-    float t = dot3(e2, q) * inv;
-    if (t >= tmin && t <= limit && t < best->t) {
+    float t, u, v;
+    if (rt_mt_ref(p, e1, e2, o, d, &t, &u, &v) && t >= tmin && t <= limit && t < best->t) {
         best->tri = tri;
         best->t = t;
         best->u = u;
@@ -179,7 +154,7 @@ static void c_intersect(const float *tv, uint32_t tri, const float o[3], const f
     }
 }
 
-static void c_trace(const cgrid *g, const rt_ray *ray, rt_hit *hit)
+RT_MT_REF_FAST static void c_trace(const cgrid *g, const rt_ray *ray, rt_hit *hit)
 {
     float o[3] = {ray->ox, ray->oy, ray->oz}, d[3] = {ray->dx, ray->dy, ray->dz}, inv[3];
     for (int k = 0; k < 3; ++k)

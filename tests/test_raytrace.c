@@ -10,6 +10,7 @@
  * RT_TEST_DATA (compile-time) is the directory of the stored references. */
 #include "check.h"
 #include "image_metrics.h"
+#include "mt_ref.h"
 #include "render.h"
 #include "scene.h"
 #include "tracer.h"
@@ -30,12 +31,13 @@ static sluice_context *ctx;
 /* Brute-force reference                                              */
 /* ------------------------------------------------------------------ */
 
-/* The same arithmetic as rt_intersect_tri (MT branch), in the same order. */
-static void bf_trace(const sluice_scene *s, const rt_ray *r, rt_hit *h)
+/* Nearest hit over every triangle, with the kernels' arithmetic (mt_ref.h). */
+RT_MT_REF_FAST static void bf_trace(const sluice_scene *s, const rt_ray *r, rt_hit *h)
 {
     const float *p = sluice_scene_positions(s);
     const uint32_t *ix = sluice_scene_indices(s);
     size_t nt = sluice_scene_triangle_count(s);
+    const float o[3] = {r->ox, r->oy, r->oz}, d[3] = {r->dx, r->dy, r->dz};
     h->tri = RT_NO_HIT;
     h->t = r->tmax;
     h->u = h->v = 0;
@@ -44,23 +46,8 @@ static void bf_trace(const sluice_scene *s, const rt_ray *r, rt_hit *h)
                     *v2 = p + 3 * ix[3 * i + 2];
         float e1[3] = {v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]};
         float e2[3] = {v2[0] - v0[0], v2[1] - v0[1], v2[2] - v0[2]};
-        float pv[3] = {r->dy * e2[2] - r->dz * e2[1], r->dz * e2[0] - r->dx * e2[2],
-                       r->dx * e2[1] - r->dy * e2[0]};
-        float det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
-        if (det == 0.0f)
-            continue;
-        float inv = 1.0f / det;
-        float sv[3] = {r->ox - v0[0], r->oy - v0[1], r->oz - v0[2]};
-        float u = (sv[0] * pv[0] + sv[1] * pv[1] + sv[2] * pv[2]) * inv;
-        if (u < 0.0f || u > 1.0f)
-            continue;
-        float q[3] = {sv[1] * e1[2] - sv[2] * e1[1], sv[2] * e1[0] - sv[0] * e1[2],
-                      sv[0] * e1[1] - sv[1] * e1[0]};
-        float v = (r->dx * q[0] + r->dy * q[1] + r->dz * q[2]) * inv;
-        if (v < 0.0f || u + v > 1.0f)
-            continue;
-        float t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
-        if (t >= r->tmin && t < h->t) {
+        float t, u, v;
+        if (rt_mt_ref(v0, e1, e2, o, d, &t, &u, &v) && t >= r->tmin && t < h->t) {
             h->tri = (uint32_t)i;
             h->t = t;
             h->u = u;

@@ -144,6 +144,17 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
 }
 
 #ifndef RT_WATERTIGHT
+/* a b - c d, and a b + c d + e f, rounded as rt_cross and rt_dot round. */
+inline float16 rt_fms16(float16 a, float16 b, float16 c, float16 d)
+{
+    return fma(a, b, -(c * d));
+}
+
+inline float16 rt_dot16(float16 a, float16 b, float16 c, float16 d, float16 e, float16 f)
+{
+    return fma(e, f, fma(c, d, a * b));
+}
+
 /* The Moller-Trumbore test of rt_intersect_tri in the lanes where m is set,
  * against the triangle (v0, e1, e2) of each lane; keeps hits in P. */
 __attribute__((always_inline)) inline void
@@ -151,18 +162,19 @@ rt_intersect16_core(int16 tri, int16 m, rt_packet *P, float16 limit, float16 v0x
                     float16 v0z, float16 e1x, float16 e1y, float16 e1z, float16 e2x, float16 e2y,
                     float16 e2z)
 {
-    float16 pvx = P->dy * e2z - P->dz * e2y, pvy = P->dz * e2x - P->dx * e2z,
-            pvz = P->dx * e2y - P->dy * e2x;
-    float16 det = e1x * pvx + e1y * pvy + e1z * pvz;
+    float16 pvx = rt_fms16(P->dy, e2z, P->dz, e2y), pvy = rt_fms16(P->dz, e2x, P->dx, e2z),
+            pvz = rt_fms16(P->dx, e2y, P->dy, e2x);
+    float16 det = rt_dot16(e1x, pvx, e1y, pvy, e1z, pvz);
     m &= det != 0.0f;
     float16 inv = 1.0f / det;
     float16 sx = P->ox - v0x, sy = P->oy - v0y, sz = P->oz - v0z;
-    float16 u = (sx * pvx + sy * pvy + sz * pvz) * inv;
+    float16 u = rt_dot16(sx, pvx, sy, pvy, sz, pvz) * inv;
     m &= ~((u < 0.0f) | (u > 1.0f));
-    float16 qx = sy * e1z - sz * e1y, qy = sz * e1x - sx * e1z, qz = sx * e1y - sy * e1x;
-    float16 v = (P->dx * qx + P->dy * qy + P->dz * qz) * inv;
+    float16 qx = rt_fms16(sy, e1z, sz, e1y), qy = rt_fms16(sz, e1x, sx, e1z),
+            qz = rt_fms16(sx, e1y, sy, e1x);
+    float16 v = rt_dot16(P->dx, qx, P->dy, qy, P->dz, qz) * inv;
     m &= ~((v < 0.0f) | (u + v > 1.0f));
-    float16 t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+    float16 t = rt_dot16(e2x, qx, e2y, qy, e2z, qz) * inv;
     m &= (t >= P->tmin) & (t <= limit) & (t < P->t);
     P->tri = select(P->tri, tri, m);
     P->t = select(P->t, t, m);
