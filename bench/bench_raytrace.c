@@ -16,7 +16,10 @@
  *       the second core worth nothing).
  * Sluice times are trace time only: rays already in a device stream, hits
  * left in one, after a warm-up; grid build and program compilation are
- * reported apart. Every time is the best of --reps runs. Hit agreement
+ * reported apart. The peers run in interleaved rounds (each round times
+ * every peer for a few frames back to back, round 0 a warm-up) and every
+ * time is the best frame of --reps rounds, so the ratios are taken under
+ * the same conditions. Hit agreement
  * (the fraction of pixels where two peers name the same triangle, or both
  * miss) keeps the comparison honest.
  *
@@ -462,21 +465,30 @@ static rt_tracer *make_tracer(const sluice_scene *sc, rt_exec exec, unsigned min
     return t;
 }
 
-/* Best of `reps` traces of the device ray stream (after one warm-up);
- * leaves the hits of the last run in `out`. */
-static double time_sluice(rt_tracer *t, sluice_stream *rays_s, sluice_stream *hits_s,
-                          const rt_ray *rays, size_t n, unsigned reps, peer_hits *out)
+/* Frames per peer and round (see run_scene). */
+#define BENCH_BURST 3
+
+/* Keeps the best frame of the timed rounds: frame f of round `round`, where
+ * round 0 is a warm-up. */
+static void keep_best(double *best, unsigned round, unsigned f, double s)
 {
-    double best = 1e30;
-    for (unsigned r = 0; r <= reps; ++r) {
-        TRY(sluice_context_finish(ctx));
-        double t0 = now();
-        TRY(rt_tracer_trace_stream(t, rays_s, n, hits_s));
-        TRY(sluice_context_finish(ctx));
-        double s = now() - t0;
-        if (r > 0 && s < best)
-            best = s;
-    }
+    if (round > 0 && ((round == 1 && f == 0) || s < *best))
+        *best = s;
+}
+
+/* One trace of the device ray stream, timed. */
+static double sluice_frame(rt_tracer *t, sluice_stream *rays_s, size_t n, sluice_stream *hits_s)
+{
+    TRY(sluice_context_finish(ctx));
+    double t0 = now();
+    TRY(rt_tracer_trace_stream(t, rays_s, n, hits_s));
+    TRY(sluice_context_finish(ctx));
+    return now() - t0;
+}
+
+/* The hits a Sluice run left in hits_s, by pixel. */
+static void sluice_hits(sluice_stream *hits_s, const rt_ray *rays, size_t n, peer_hits *out)
+{
     rt_hit *h = xmalloc(n * sizeof *h);
     size_t got = 0;
     TRY(sluice_stream_download(hits_s, h, n, &got));
@@ -486,7 +498,15 @@ static double time_sluice(rt_tracer *t, sluice_stream *rays_s, sluice_stream *hi
     }
     hits_from_rt(rays, h, n, out);
     free(h);
-    return best;
+}
+
+/* One frame of the plain C tracer, one thread, timed. */
+static double c_frame(const cgrid *cg, const rt_ray *rays, size_t n, rt_hit *out)
+{
+    double t0 = now();
+    for (size_t i = 0; i < n; ++i)
+        c_trace(cg, &rays[i], &out[i]);
+    return now() - t0;
 }
 
 static int run_scene(const char *name, unsigned size, unsigned reps, scene_result *res)
@@ -560,47 +580,19 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
         sluice_stream_destroy(si);
     }
 
-    /* (a), (b): Sluice, rays already on the device */
-    sluice_stream *rays_s = NULL, *hits_s = NULL;
+    /* the peers: (a), (b) Sluice, rays already on the device, (c) plain C,
+     * (d) Embree */
+    sluice_stream *rays_s = NULL, *hits_f = NULL, *hits_s = NULL;
     TRY(sluice_stream_create(ctx, sizeof(rt_ray), n, &rays_s));
+    TRY(sluice_stream_create(ctx, sizeof(rt_hit), n, &hits_f));
     TRY(sluice_stream_create(ctx, sizeof(rt_hit), n, &hits_s));
     TRY(sluice_stream_upload(rays_s, rays, n));
-    peer_hits fused = hits_alloc(n), stream = hits_alloc(n), cref = hits_alloc(n);
     rt_tracer *tf = make_tracer(sc, RT_EXEC_FUSED, min_dim, 0, &res->tracer_create_s[0]);
-    res->fused_s = time_sluice(tf, rays_s, hits_s, rays, n, reps, &fused);
-    rt_tracer_destroy(tf);
     rt_tracer *ts = make_tracer(sc, RT_EXEC_STREAM, min_dim, 0, &res->tracer_create_s[1]);
-    res->stream_s = time_sluice(ts, rays_s, hits_s, rays, n, reps, &stream);
-    rt_tracer_destroy(ts);
-    sluice_stream_destroy(rays_s);
-    sluice_stream_destroy(hits_s);
-
-    /* (c): plain C, one thread, same ray order */
     cgrid cg;
     cgrid_init(&cg, &gh, sc);
     rt_hit *ch = xmalloc(n * sizeof *ch);
-    res->c_s = 1e30;
-    for (unsigned r = 0; r < reps; ++r) {
-        double t0 = now();
-        for (size_t i = 0; i < n; ++i)
-            c_trace(&cg, &rays[i], &ch[i]);
-        double s = now() - t0;
-        if (s < res->c_s)
-            res->c_s = s;
-    }
-    hits_from_rt(rays, ch, n, &cref);
-    free(ch);
-    free(cg.tv);
-    rt_grid_host_free(&gh);
-
-    size_t hit = 0;
-    for (size_t i = 0; i < n; ++i)
-        hit += fused.tri[i] != RT_NO_HIT;
-    res->hit_fraction = n ? (double)hit / (double)n : 0.0;
-    res->agree_stream = agree_tri(&fused, &stream, n);
-    res->agree_c = agree_tri(&fused, &cref, n);
-
-    /* (d): Embree */
+    peer_hits fused = hits_alloc(n), stream = hits_alloc(n), cref = hits_alloc(n);
 #ifdef HAVE_EMBREE
     res->embree = 1;
     RTCDevice dev = rtcNewDevice(NULL);
@@ -634,25 +626,60 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     }
     peer_hits emb = hits_alloc(n);
     static const int packets[2] = {1, 16};
+#endif
+
+    /* Interleaved rounds: each round times every peer in a burst of
+     * BENCH_BURST frames back to back, so that each is measured warm (its
+     * data in cache, its threads awake: on these shared 2-core machines a
+     * frame after an idle or single-threaded spell was up to 50% slower, for
+     * every peer), and a slow spell of the machine falls on all peers alike
+     * rather than on whichever ran then. Round 0 is a warm-up; every time is
+     * the best frame of the other `reps` rounds. */
+    for (unsigned r = 0; r <= reps; ++r) {
+        for (unsigned f = 0; f < BENCH_BURST; ++f)
+            keep_best(&res->fused_s, r, f, sluice_frame(tf, rays_s, n, hits_f));
+        for (unsigned f = 0; f < BENCH_BURST; ++f)
+            keep_best(&res->stream_s, r, f, sluice_frame(ts, rays_s, n, hits_s));
+        for (unsigned f = 0; f < BENCH_BURST; ++f)
+            keep_best(&res->c_s, r, f, c_frame(&cg, rays, n, ch));
+#ifdef HAVE_EMBREE
+        for (int p = 0; p < 2; ++p)
+            for (unsigned th = 1; th <= 2; ++th)
+                for (unsigned f = 0; f < BENCH_BURST; ++f)
+                    keep_best(&res->emb_s[p][th - 1], r, f,
+                              emb_frame(es, by_pixel, size, size, emb.tri, emb.t, packets[p], th));
+#endif
+    }
+    sluice_hits(hits_f, rays, n, &fused);
+    sluice_hits(hits_s, rays, n, &stream);
+    hits_from_rt(rays, ch, n, &cref);
+    rt_tracer_destroy(tf);
+    rt_tracer_destroy(ts);
+    sluice_stream_destroy(rays_s);
+    sluice_stream_destroy(hits_f);
+    sluice_stream_destroy(hits_s);
+    free(ch);
+    free(cg.tv);
+    rt_grid_host_free(&gh);
+
+    size_t hit = 0;
+    for (size_t i = 0; i < n; ++i)
+        hit += fused.tri[i] != RT_NO_HIT;
+    res->hit_fraction = n ? (double)hit / (double)n : 0.0;
+    res->agree_stream = agree_tri(&fused, &stream, n);
+    res->agree_c = agree_tri(&fused, &cref, n);
+
+#ifdef HAVE_EMBREE
+    /* Embree's best on the cores Sluice has: 2 threads normally, 1 when the
+     * other core is busy and 2 threads lose */
     res->emb_best_s = 1e30;
-    res->emb_best_threads = 2;
     for (int p = 0; p < 2; ++p)
-        for (unsigned th = 1; th <= 2; ++th) {
-            double best = 1e30;
-            for (unsigned r = 0; r <= reps; ++r) {
-                double s = emb_frame(es, by_pixel, size, size, emb.tri, emb.t, packets[p], th);
-                if (r > 0 && s < best)
-                    best = s;
-            }
-            res->emb_s[p][th - 1] = best;
-            /* Embree's best on the cores Sluice has: 2 threads normally, 1
-             * when the other core is busy and 2 threads lose */
-            if (best < res->emb_best_s) {
-                res->emb_best_s = best;
+        for (unsigned th = 1; th <= 2; ++th)
+            if (res->emb_s[p][th - 1] < res->emb_best_s) {
+                res->emb_best_s = res->emb_s[p][th - 1];
                 res->emb_best_threads = th;
                 res->emb_best_name = packets[p] == 16 ? "rtcIntersect16" : "rtcIntersect1";
             }
-        }
     /* the hits of the last run (rtcIntersect16, 2 threads) */
     res->agree_emb_tri = agree_tri(&fused, &emb, n);
     res->agree_emb_t = agree_t(&fused, &emb, n);
@@ -735,7 +762,8 @@ static void usage(FILE *f)
     fprintf(f, "usage: " PROG " [--size N] [--reps R] [--scene NAME]... [--out FILE]\n"
                "                      [--purcell-size N] [--skip-purcell] [--quick]\n"
                "  --size N          image side for the rays/s comparison (default 512)\n"
-               "  --reps R          timed runs per peer, best kept (default 10)\n"
+               "  --reps R          timed rounds, each running every peer for 3 frames;\n"
+               "                    the best frame of each peer is kept (default 10)\n"
                "  --scene NAME      scene (default cornell and bunny); repeatable\n"
                "  --out FILE        write the results as JSON\n"
                "  --purcell-size N  image side for Purcell's statistics (default 1024)\n"
@@ -812,7 +840,9 @@ int main(int argc, char **argv)
     scene_result res[MAX_SCENES];
     int status = 0;
     size_t n = (size_t)size * size;
-    printf("\nprimary rays, %ux%u, one per pixel centre, best of %u; M rays/s\n", size, size, reps);
+    printf("\nprimary rays, %ux%u, one per pixel centre, best frame of %u interleaved rounds; M "
+           "rays/s\n",
+           size, size, reps);
     printf("%-10s %9s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s\n", "scene", "triangles", "fused",
            "stream", "C 1t", "Emb 1t", "Emb 2t", "f/Emb", "s/f", "f/C", "=stream", "=Embree");
     for (size_t i = 0; i < nscenes; ++i) {
@@ -914,7 +944,9 @@ int main(int argc, char **argv)
         fprintf(f,
                 "  \"setup\": {\"width\": %u, \"height\": %u, \"rays_per_pixel\": 1, \"rays\": "
                 "\"primary, through the pixel centres, the scene's camera, 8x8-tile order\", "
-                "\"reps\": %u, \"timing\": \"best of reps after a warm-up; Sluice: trace only, "
+                "\"reps\": %u, \"timing\": \"interleaved rounds, each timing every peer for 3 "
+                "frames back to back; the best frame of reps rounds after a warm-up round; "
+                "Sluice: trace only, "
                 "rays and hits in device streams\", \"grid_min_dim\": \"auto "
                 "(rt_grid_auto_min_dim_edge with rt_grid_edge_quartile, per scene)\", \"quick\": "
                 "%s},\n",
