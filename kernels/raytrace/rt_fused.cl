@@ -113,6 +113,13 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
         }
         int16 axis;
         float16 te = rt_voxel_exit16(g, &P, cx, cy, cz, &axis);
+        /* the next voxel does not wait for the tests: a lane with a hit
+         * steps too, but stops below. Taking the tests off the chain from
+         * one voxel to the next made cornell 8% faster (bunny within 2%). */
+        int16 adv = active & ~(te >= P.tmax);
+        cx += select((int16)0, sx, adv & (axis == 0));
+        cy += select((int16)0, sy, adv & (axis == 1));
+        cz += select((int16)0, sz, adv & (axis == 2));
         int16 full = active & (as_uint16(a) < as_uint16(b));
         if (rt_any16(full)) {
             tests += as_uint16(select((int16)0, b - a, full));
@@ -124,13 +131,8 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
             else
                 rt_intersect16_lists(tv, cell_tris, a, b, full, &P, limit);
         }
-        int16 done = (P.tri != -1) | (te >= P.tmax);
-        int16 go = active & ~done;
-        cx += select((int16)0, sx, go & (axis == 0));
-        cy += select((int16)0, sy, go & (axis == 1));
-        cz += select((int16)0, sz, go & (axis == 2));
         int16 inside = (cx >= 0) & (cx < nx) & (cy >= 0) & (cy < ny) & (cz >= 0) & (cz < nz);
-        active = go & inside;
+        active = adv & inside & (P.tri == -1);
     }
     uint a_steps[16], a_tests[16];
     int a_tri[16];
