@@ -44,7 +44,7 @@ static void usage(FILE *out)
         "  --intersect-threshold F  stream mode: intersect when >= F of live rays need it\n"
         "                           (default 0.2)\n"
         "  --unroll-steps K         stream mode: voxels per traverse pass (default 16)\n"
-        "  --unroll-tests M         stream mode: triangle tests per intersect pass (default 16)\n"
+        "  --unroll-tests M         stream mode: triangle tests per intersect pass (default 32)\n"
         "  --ordered                stream mode: ordered conditional outputs\n"
         "  --progress               progress bar with ETA on stderr\n"
         "  --checkpoint N           write the image every N samples\n"

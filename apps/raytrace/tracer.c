@@ -21,7 +21,7 @@ rt_tracer_options rt_tracer_options_default(void)
     o.grid_min_dim = RT_GRID_AUTO_MIN_DIM;
     o.intersect_threshold = 0.2f;
     o.unroll_steps = 16;
-    o.unroll_tests = 16;
+    o.unroll_tests = 32;
     o.ordered = 0;
     o.render_mode = RT_MODE_SHADOW;
     return o;
