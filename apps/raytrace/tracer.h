@@ -68,8 +68,9 @@ typedef struct rt_tracer_options {
 /** Defaults: stream, Moller-Trumbore, device grid, RT_GRID_AUTO_MIN_DIM,
  *  threshold 0.2 (Purcell 4.1.2), k = 16 voxels and m = 32 triangle tests
  *  per pass (Purcell's own k = m = 1 passes are 2-10x more: measured slower
- *  here; m = 32 against 16 made primary rays in stream mode 10-30% faster on
- *  cornell and bunny, 512x512), unordered, RT_MODE_SHADOW. */
+ *  here; m = 32 against 16 took stream mode from 0.29-0.39 to 0.30-0.46 of
+ *  fused on cornell and from 0.35-0.40 to 0.41-0.47 on bunny, bench_raytrace),
+ *  unordered, RT_MODE_SHADOW. */
 rt_tracer_options rt_tracer_options_default(void);
 
 /** What tracing has cost so far (Purcell Fig. 5.2, Tables 5.2 and 5.4). */
