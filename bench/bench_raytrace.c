@@ -550,8 +550,7 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
             exit(2);
         }
         double s = now() - t0;
-        if (r > 0 && (r == 1 || s < res->grid_host_s))
-            res->grid_host_s = s;
+        keep_best(&res->grid_host_s, r, 0, s);
     }
     size_t cells = (size_t)desc.dims[0] * desc.dims[1] * desc.dims[2];
     res->grid_entries = gh.cell_start[cells];
@@ -573,8 +572,7 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
             TRY(sluice_context_finish(ctx));
             double s = now() - t0;
             rt_grid_device_free(&g);
-            if (r > 0 && (r == 1 || s < res->grid_device_s))
-                res->grid_device_s = s;
+            keep_best(&res->grid_device_s, r, 0, s);
         }
         sluice_stream_destroy(sp);
         sluice_stream_destroy(si);
