@@ -161,18 +161,26 @@ static sluice_scene *load(const char *name)
     return s;
 }
 
-static rt_tracer *make_tracer(const sluice_scene *s, rt_exec exec, rt_intersector isect,
-                              unsigned mode)
+static rt_tracer *make_tracer_walk(const sluice_scene *s, rt_exec exec, rt_intersector isect,
+                                   unsigned mode, rt_fused_walk walk, size_t list_copy_max)
 {
     char err[1024];
     rt_tracer_options o = rt_tracer_options_default();
     o.exec = exec;
     o.intersector = isect;
     o.render_mode = mode;
+    o.fused_walk = walk;
+    o.list_copy_max = list_copy_max;
     rt_tracer *t = NULL;
     sluice_status st = rt_tracer_create(ctx, s, &o, &t, err, sizeof err);
     CHECK(st == SLUICE_OK, "rt_tracer_create: %s", err);
     return t;
+}
+
+static rt_tracer *make_tracer(const sluice_scene *s, rt_exec exec, rt_intersector isect,
+                              unsigned mode)
+{
+    return make_tracer_walk(s, exec, isect, mode, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT);
 }
 
 static size_t total_rays_checked;
@@ -186,15 +194,29 @@ static void check_against_bf(const char *name, const sluice_scene *s, rt_ray *ra
     for (size_t i = 0; i < nbf; ++i)
         bf_trace(s, &rays[i], &ref[i]);
     rt_hit *first = malloc(n * sizeof *first);
-    for (int e = 0; e < 2; ++e) {
-        rt_tracer *t =
-            make_tracer(s, e ? RT_EXEC_FUSED : RT_EXEC_STREAM, RT_ISECT_MT, RT_MODE_CAST);
+    /* the stream mode, then every way the fused mode can traverse: a voxel
+     * at a time, walking ahead with the list copy, and without it */
+    static const struct {
+        const char *name;
+        rt_fused_walk walk;
+        size_t copy_max;
+    } paths[] = {{"stream", RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT},
+                 {"fused voxel", RT_WALK_OFF, RT_LIST_COPY_MAX_DEFAULT},
+                 {"fused walk", RT_WALK_ON, RT_LIST_COPY_MAX_DEFAULT},
+                 {"fused walk, gather", RT_WALK_ON, 0}};
+    for (int e = 0; e < 4; ++e) {
+        rt_tracer *t = make_tracer_walk(s, e ? RT_EXEC_FUSED : RT_EXEC_STREAM, RT_ISECT_MT,
+                                        RT_MODE_CAST, paths[e].walk, paths[e].copy_max);
         if (!t)
             break;
+        CHECK(e == 0 || strstr(rt_tracer_fused_path(t), e == 1   ? "a voxel at a time"
+                                                        : e == 2 ? "list copy"
+                                                                 : "no list copy"),
+              "%s: fused path \"%s\"", paths[e].name, rt_tracer_fused_path(t));
         CHECK_OK(ctx, rt_tracer_trace(t, rays, n, got));
         cmp_result c;
         char what[128];
-        snprintf(what, sizeof what, "%s/%s", name, e ? "fused" : "stream");
+        snprintf(what, sizeof what, "%s/%s", name, paths[e].name);
         compare_hits(got, ref, nbf, &c, what);
         printf("%-28s %8zu rays (%zu hit): %zu same, %zu ties at shared edges, %zu mismatches\n",
                what, nbf, c.hits, c.same, c.ties, c.mismatches);
@@ -209,7 +231,8 @@ static void check_against_bf(const char *name, const sluice_scene *s, rt_ray *ra
             for (size_t i = 0; i < n; ++i)
                 diff += first[i].tri != got[i].tri || first[i].t != got[i].t ||
                         first[i].steps != got[i].steps || first[i].tests != got[i].tests;
-            CHECK(diff == 0, "%s: stream and fused differ on %zu of %zu rays", name, diff, n);
+            CHECK(diff == 0, "%s: stream and %s differ on %zu of %zu rays", name, paths[e].name,
+                  diff, n);
         }
         rt_tracer_destroy(t);
     }

@@ -368,6 +368,7 @@ int main(int argc, char **argv)
     rep.scene_bytes = rt_tracer_scene_bytes(tracer);
     rep.tracer_stream_bytes = rt_tracer_stream_bytes(tracer);
     rep.skipped = rt_tracer_skipped(tracer);
+    rep.fused_path = rt_tracer_fused_path(tracer);
     rep.interrupted = interrupted;
     if (!c.quiet)
         rt_stats_print(&rep, ctx, stderr);

@@ -51,6 +51,8 @@ void rt_stats_print(const rt_stats_report *r, sluice_context *ctx, FILE *out)
             r->grid->bytes / 1048576.0, g->dims[0], g->dims[1], g->dims[2], r->grid->cell_tri_count,
             r->scene_bytes / 1048576.0,
             (r->tracer_stream_bytes + r->render->stream_bytes) / 1048576.0);
+    if (r->fused_path && r->fused_path[0])
+        fprintf(out, "fused traversal: %s\n", r->fused_path);
     fprintf(out, "skipped: %s\n", r->skipped && r->skipped[0] ? r->skipped : "nothing");
     fprintf(out, "non-finite contributions dropped: %llu, non-finite pixels: %zu\n",
             (unsigned long long)r->render->nonfinite, r->bad_pixels);
@@ -118,7 +120,9 @@ sluice_status rt_stats_write_json(const rt_stats_report *r, sluice_context *ctx,
             r->scene_bytes, r->tracer_stream_bytes + r->render->stream_bytes);
     fprintf(f, "  \"nonfinite_contributions\": %llu,\n  \"nonfinite_pixels\": %zu,\n",
             (unsigned long long)r->render->nonfinite, r->bad_pixels);
-    fprintf(f, "  \"skipped\": ");
+    fprintf(f, "  \"fused_traversal\": ");
+    json_string(f, r->fused_path ? r->fused_path : "");
+    fprintf(f, ",\n  \"skipped\": ");
     json_string(f, r->skipped);
     fprintf(f, ",\n  \"kernels\": [");
     size_t nk = ctx && sluice_profile_enabled(ctx) ? sluice_profile_count(ctx) : 0;

@@ -28,6 +28,7 @@ typedef struct rt_stats_report {
     const rt_grid_device *grid;
     size_t scene_bytes, tracer_stream_bytes;
     const char *skipped;
+    const char *fused_path; /* rt_tracer_fused_path ("" in the stream mode) */
     int interrupted;
 } rt_stats_report;
 

@@ -24,6 +24,8 @@ rt_tracer_options rt_tracer_options_default(void)
     o.unroll_tests = 32;
     o.ordered = 0;
     o.render_mode = RT_MODE_SHADOW;
+    o.fused_walk = RT_WALK_AUTO;
+    o.list_copy_max = RT_LIST_COPY_MAX_DEFAULT;
     return o;
 }
 
@@ -177,6 +179,96 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
     return SLUICE_OK;
 }
 
+/* Voxels the fused mode's packets walk before they test (rt_fused.cl): 4
+ * measured best on bunny against 2 and 8 (bench_raytrace). */
+#define RT_WALK_VOXELS 4
+
+/* How the fused mode will traverse (tracer.h, rt_fused_walk). Walking ahead
+ * pays where rays cross many empty voxels between tests: bunny,
+ * teapotahedron, spheres and ring have 5-35% of their voxels occupied, the
+ * Cornell box 94%, whose rays test in almost every voxel they enter. */
+static sluice_status choose_fused_path(rt_tracer *t, char *err, size_t err_size)
+{
+    t->walks_ahead = 0;
+    t->fused_path[0] = '\0';
+    if (t->opt.exec != RT_EXEC_FUSED)
+        return SLUICE_OK;
+    if (t->opt.intersector != RT_ISECT_MT) {
+        snprintf(t->fused_path, sizeof t->fused_path, "one ray at a time (watertight test)");
+        return SLUICE_OK;
+    }
+    const rt_grid_desc *d = &t->grid.desc;
+    size_t cells = (size_t)d->dims[0] * d->dims[1] * d->dims[2], occupied = 0;
+    uint32_t *start = malloc((cells + 1) * sizeof *start);
+    if (!start) {
+        sluice_set_error(err, err_size, "out of host memory");
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    sluice_status st = sluice_stream_download(t->grid.cell_start, start, cells + 1, NULL);
+    if (st != SLUICE_OK) {
+        sluice_set_error(err, err_size, "grid download: %s", sluice_context_error(t->ctx));
+        free(start);
+        return st;
+    }
+    for (size_t c = 0; c < cells; ++c)
+        occupied += start[c] < start[c + 1];
+    free(start);
+    double pct = cells ? 100.0 * (double)occupied / (double)cells : 0.0;
+    t->walks_ahead = t->opt.fused_walk == RT_WALK_ON ||
+                     (t->opt.fused_walk == RT_WALK_AUTO && 2 * occupied <= cells);
+    if (!t->walks_ahead) {
+        snprintf(t->fused_path, sizeof t->fused_path,
+                 "a voxel at a time (%.0f%% of voxels hold triangles)", pct);
+        return SLUICE_OK;
+    }
+    /* ten planes padded so that a 16-wide load from any entry stays inside */
+    size_t stride = ((t->grid.cell_tri_count + 15) & ~(size_t)15) + 16;
+    size_t bytes = 10 * sizeof(float) * stride;
+    t->list_stride = bytes <= t->opt.list_copy_max ? stride : 0;
+    int w =
+        snprintf(t->fused_path, sizeof t->fused_path,
+                 "walk ahead %d voxels (%.0f%% of voxels hold triangles), ", RT_WALK_VOXELS, pct);
+    if (w > 0 && (size_t)w < sizeof t->fused_path) {
+        if (t->list_stride)
+            snprintf(t->fused_path + w, sizeof t->fused_path - (size_t)w, "list copy %.2f MB",
+                     (double)bytes / 1048576.0);
+        else
+            snprintf(t->fused_path + w, sizeof t->fused_path - (size_t)w,
+                     "no list copy (%.2f MB > %.2f MB)", (double)bytes / 1048576.0,
+                     (double)t->opt.list_copy_max / 1048576.0);
+    }
+    return SLUICE_OK;
+}
+
+/* The list-order copy of the triangle records (rt_list_records). */
+static sluice_status build_list_copy(rt_tracer *t)
+{
+    if (!t->list_stride)
+        return SLUICE_OK;
+    sluice_kernel *k = NULL;
+    uint32_t entries = (uint32_t)t->grid.cell_tri_count;
+    sluice_status st =
+        sluice_stream_create(t->ctx, sizeof(float), 10 * t->list_stride, &t->list_records);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_list_records", &k);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 0, t->grid.cell_tris, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 1, t->tri_vertices, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 2, sizeof entries, &entries);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 3, t->list_records, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(k, t->list_stride);
+    if (st == SLUICE_OK)
+        st = sluice_context_finish(t->ctx);
+    sluice_kernel_destroy(k);
+    if (st == SLUICE_OK)
+        t->scene_bytes += 10 * sizeof(float) * t->list_stride;
+    return st;
+}
+
 static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
 {
     const sluice_scene_stats *ss = sluice_scene_statistics(t->scene);
@@ -184,12 +276,17 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     int traces_specular = mode == RT_MODE_WHITTED || mode == RT_MODE_PATH;
     int mirror = traces_specular && (ss->kinds_present & SLUICE_KIND_BIT(SLUICE_MATERIAL_MIRROR));
     int glass = traces_specular && (ss->kinds_present & SLUICE_KIND_BIT(SLUICE_MATERIAL_GLASS));
-    char opts[256];
-    snprintf(opts, sizeof opts, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s%s%s",
+    char opts[384], walk[96] = "";
+    if (t->walks_ahead && t->list_stride)
+        snprintf(walk, sizeof walk, " -DRT_FUSED_WALK=%d -DRT_LIST_COPY -DRT_LIST_STRIDE=%zuu",
+                 RT_WALK_VOXELS, t->list_stride);
+    else if (t->walks_ahead)
+        snprintf(walk, sizeof walk, " -DRT_FUSED_WALK=%d", RT_WALK_VOXELS);
+    snprintf(opts, sizeof opts, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s%s%s%s",
              t->opt.unroll_steps, t->opt.unroll_tests,
              t->opt.intersector == RT_ISECT_WATERTIGHT ? " -DRT_WATERTIGHT" : "",
              mirror ? " -DRT_HAS_MIRROR" : "", glass ? " -DRT_HAS_GLASS" : "",
-             ss->has_normals ? " -DRT_HAS_NORMALS" : "");
+             ss->has_normals ? " -DRT_HAS_NORMALS" : "", walk);
     /* what the scene lets us leave out (Purcell builds only what a scene needs) */
     char *p = t->skipped;
     size_t left = sizeof t->skipped;
@@ -255,7 +352,8 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
     }
     rt_tracer_options o = opt ? *opt : rt_tracer_options_default();
     if (o.unroll_steps == 0 || o.unroll_tests == 0 || o.unroll_steps > 4096 ||
-        o.unroll_tests > 4096 || !(o.intersect_threshold >= 0.0f) || o.intersect_threshold > 1.0f) {
+        o.unroll_tests > 4096 || !(o.intersect_threshold >= 0.0f) || o.intersect_threshold > 1.0f ||
+        (unsigned)o.fused_walk > (unsigned)RT_WALK_ON) {
         sluice_set_error(
             err, err_size, "rt_tracer_create: bad options (min dim %u, unroll %u/%u, threshold %g)",
             o.grid_min_dim, o.unroll_steps, o.unroll_tests, (double)o.intersect_threshold);
@@ -275,7 +373,11 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
     if (st == SLUICE_OK)
         st = build_grid(t, err, err_size);
     if (st == SLUICE_OK)
+        st = choose_fused_path(t, err, err_size);
+    if (st == SLUICE_OK)
         st = build_program(t, err, err_size);
+    if (st == SLUICE_OK && (st = build_list_copy(t)) != SLUICE_OK)
+        sluice_set_error(err, err_size, "list copy: %s", sluice_context_error(ctx));
     static const char *const ctr_names[] = {"voxels", "tests", "done"};
     if (st == SLUICE_OK)
         st = sluice_counters_create(ctx, RT_CTR_TRACE_COUNT, ctr_names, &t->counters);
@@ -315,6 +417,7 @@ void rt_tracer_destroy(rt_tracer *t)
     sluice_stream_destroy(t->host_rays);
     sluice_stream_destroy(t->host_hits);
     rt_grid_device_free(&t->grid);
+    sluice_stream_destroy(t->list_records);
     sluice_stream *s[] = {t->positions, t->indices,      t->tri_vertices, t->normals, t->tri_mat,
                           t->materials, t->point_lights, t->area_tris,    t->area_cdf};
     for (size_t i = 0; i < sizeof s / sizeof *s; ++i)
@@ -421,6 +524,11 @@ size_t rt_tracer_stream_bytes(const rt_tracer *t)
 const rt_tracer_options *rt_tracer_get_options(const rt_tracer *t)
 {
     return t ? &t->opt : NULL;
+}
+
+const char *rt_tracer_fused_path(const rt_tracer *t)
+{
+    return t ? t->fused_path : "";
 }
 
 const char *rt_tracer_skipped(const rt_tracer *t)

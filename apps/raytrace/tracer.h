@@ -49,6 +49,17 @@ typedef enum rt_grid_build {
     RT_GRID_BUILD_HOST = 1    /**< in plain C, then uploaded */
 } rt_grid_build;
 
+/** How the fused mode's packets move through the grid (kernels/raytrace/rt_fused.cl). */
+typedef enum rt_fused_walk {
+    RT_WALK_AUTO = 0, /**< walk ahead when at most half of the voxels hold triangles */
+    RT_WALK_OFF = 1,  /**< a voxel at a time: each voxel's tests before the next step */
+    RT_WALK_ON = 2    /**< walk ahead: step 4 voxels, then test them in order */
+} rt_fused_walk;
+
+/** Largest copy of the triangle records in list order that a walking fused
+ *  tracer makes by default (rt_tracer_options.list_copy_max). */
+#define RT_LIST_COPY_MAX_DEFAULT ((size_t)64 << 20)
+
 /** Options of rt_tracer_create(); start from rt_tracer_options_default(). */
 typedef struct rt_tracer_options {
     rt_exec exec;
@@ -63,6 +74,15 @@ typedef struct rt_tracer_options {
     /** Render mode the shading kernels are built for (RT_MODE_*), so that
      *  code a scene or mode does not need is not compiled. */
     unsigned render_mode;
+    /** Fused mode, Moller-Trumbore: walk ahead or a voxel at a time. Both
+     *  give the same hits and counts; walking ahead is faster on sparse
+     *  grids (bunny 10-20%, teapotahedron 20%), slower on dense ones
+     *  (cornell 25%), hence RT_WALK_AUTO's rule (bench_raytrace). */
+    rt_fused_walk fused_walk;
+    /** Walking ahead: the most bytes of the list-order copy of the triangle
+     *  records (40 per grid entry) that its turned tests read; past this,
+     *  they gather through the lists instead (about 8% slower on bunny). */
+    size_t list_copy_max;
 } rt_tracer_options;
 
 /** Defaults: stream, Moller-Trumbore, device grid, RT_GRID_AUTO_MIN_DIM,
@@ -70,7 +90,7 @@ typedef struct rt_tracer_options {
  *  per pass (Purcell's own k = m = 1 passes are 2-10x more: measured slower
  *  here; m = 32 against 16 took stream mode from 0.29-0.39 to 0.30-0.46 of
  *  fused on cornell and from 0.35-0.40 to 0.41-0.47 on bunny, bench_raytrace),
- *  unordered, RT_MODE_SHADOW. */
+ *  unordered, RT_MODE_SHADOW, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT. */
 rt_tracer_options rt_tracer_options_default(void);
 
 /** What tracing has cost so far (Purcell Fig. 5.2, Tables 5.2 and 5.4). */
@@ -133,6 +153,11 @@ size_t rt_tracer_stream_bytes(const rt_tracer *t);
 
 /** The options the tracer was created with. */
 const rt_tracer_options *rt_tracer_get_options(const rt_tracer *t);
+
+/** How the fused mode traverses this scene's grid, e.g. "walk ahead 4
+ *  voxels (6% of voxels hold triangles), list copy 7.7 MB"; "" for the
+ *  stream mode. */
+const char *rt_tracer_fused_path(const rt_tracer *t);
 
 /** A text listing what the scene lets the tracer skip (kernels not compiled,
  *  passes not run), e.g. "refraction (no glass); reflection (no mirror)". */

@@ -29,6 +29,13 @@ struct rt_tracer {
     sluice_stream *area_cdf;     /* float */
     size_t scene_bytes;
 
+    /* fused mode walking ahead (rt_fused.cl): the list-order copy of the
+     * triangle records (NULL when the walk gathers instead) */
+    int walks_ahead;
+    sluice_stream *list_records;
+    size_t list_stride; /* floats per plane of list_records */
+    char fused_path[128];
+
     sluice_program *program;
     sluice_kernel *k_setup, *k_traverse, *k_intersect, *k_route_t, *k_route_i, *k_route_setup,
         *k_fused;

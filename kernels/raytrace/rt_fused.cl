@@ -42,13 +42,24 @@ inline void rt_trace_one(const rt_grid_args *g, global const uint *cell_start,
 /* ------------------------------------------------------------------ */
 
 /* A work-item traces its rays 16 at a time, one per lane, so the hits and
- * the counts are the stream mode's bit for bit. Lanes advance in lockstep,
- * one voxel per round; a lane whose voxel is empty, or whose ray is done,
- * idles (masked). When all active lanes are in one voxel (coherent rays in a
- * small scene), its list bounds are read with scalar loads; the lists are
- * tested by rt_intersect16_lists (lanes grouped by voxel, triangles
- * broadcast). The watertight intersector keeps the scalar loop
- * (rt_trace_one). */
+ * the counts are the stream mode's bit for bit. Lanes advance in lockstep;
+ * a lane whose voxel is empty, or whose ray is done, idles (masked). Two
+ * ways, chosen by the host for the scene (tracer.c, choose_fused_path):
+ *
+ *   a voxel at a time (dense grids such as the Cornell box): each round
+ *   reads the voxel's list bounds, tests, then steps. When all active lanes
+ *   are in one voxel (coherent rays in a small scene), the bounds are read
+ *   with scalar loads; the lists are tested by rt_intersect16_lists (lanes
+ *   grouped by voxel, triangles broadcast).
+ *
+ *   walking ahead (RT_FUSED_WALK, sparse grids): each round steps every lane
+ *   RT_FUSED_WALK voxels, then tests those voxels in order, each group of
+ *   lanes with the same list the cheaper of two ways
+ *   (rt_intersect16_lists_either). On bunny (6% of voxels occupied) a ray
+ *   crosses about 12 voxels and tests in 2; waiting on each voxel's bounds
+ *   before stepping on cost more than the tests.
+ *
+ * The watertight intersector keeps the scalar loop (rt_trace_one). */
 #if !defined(RT_WATERTIGHT) && !defined(RT_FUSED_SCALAR)
 #define RT_PACKET 16
 
@@ -57,7 +68,8 @@ inline void rt_trace_one(const rt_grid_args *g, global const uint *cell_start,
 inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, uint first,
                             uint count, global rt_hit *hits, global uint *maxima,
                             global const uint *cell_start, global const uint *cell_tris,
-                            global const float *tv, uint *steps_sum, uint *tests_sum)
+                            global const float *tv, global const float *lists, uint *steps_sum,
+                            uint *tests_sum)
 {
     int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     int16 live = lane < (int)count;
@@ -95,6 +107,57 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
     int16 sz = select((int16)(-1), (int16)1, P.dz > 0.0f);
     int nx = g->dims[0], ny = g->dims[1], nz = g->dims[2];
     uint16 steps = (uint16)0u, tests = (uint16)0u;
+#ifdef RT_FUSED_WALK
+    /* Walk ahead (sparse grids): each round first steps every lane through
+     * RT_FUSED_WALK voxels, reading their list bounds as it goes, then runs
+     * the tests of those voxels in order. The walk has no branch that waits
+     * on a load, so its gathers overlap, where the voxel-at-a-time loop below
+     * waits on each one before it can tell whether to test. A lane that hits
+     * in the round's voxel w has walked past it: it counts only the voxels
+     * up to w, so the counts stay those of rt_trace_one. */
+    while (rt_any16(active)) {
+        int16 wa[RT_FUSED_WALK], wb[RT_FUSED_WALK];
+        float16 wte[RT_FUSED_WALK];
+        int16 run = active, walked = (int16)0;
+        uint with_tests = 0u; /* bit w: some lane has triangles in its voxel w */
+        for (int w = 0; w < RT_FUSED_WALK; ++w) {
+            int16 ci = rt_cell_index16(g, cx, cy, cz);
+            int16 a = rt_gather_i(cell_start, ci, run), b = rt_gather_i(cell_start, ci + 1, run);
+            int16 axis;
+            float16 te = rt_voxel_exit16(g, &P, cx, cy, cz, &axis);
+            wa[w] = a;
+            wb[w] = b;
+            wte[w] = te;
+            with_tests |= (uint)(sluice_mask16(run & (as_uint16(a) < as_uint16(b))) != 0) << w;
+            walked -= run;
+            int16 adv = run & ~(te >= P.tmax);
+            cx += select((int16)0, sx, adv & (axis == 0));
+            cy += select((int16)0, sy, adv & (axis == 1));
+            cz += select((int16)0, sz, adv & (axis == 2));
+            run = adv & (cx >= 0) & (cx < nx) & (cy >= 0) & (cy < ny) & (cz >= 0) & (cz < nz);
+        }
+        int16 alive = active; /* no hit yet */
+        while (with_tests) {
+            int w = rt_lowest_bit(with_tests);
+            with_tests &= with_tests - 1u;
+            /* lanes that walked into voxel w (a lane that stops walks no
+             * further), have no hit yet, and find triangles there */
+            int16 a = wa[w], b = wb[w];
+            int16 full = alive & (walked > w) & (as_uint16(a) < as_uint16(b));
+            if (!rt_any16(full))
+                continue;
+            tests += as_uint16(select((int16)0, b - a, full));
+            float16 limit = select(rt_voxel_limit16(wte[w], P.tmax), P.tmax, P.any_hit);
+            rt_intersect16_lists_either(tv, lists, cell_tris, a, b, full, &P, limit);
+            int16 hit = full & (P.tri != -1);
+            steps += as_uint16(select((int16)0, (int16)(w + 1), hit));
+            alive &= ~hit;
+        }
+        steps += as_uint16(select((int16)0, walked, alive));
+        active = run & alive;
+    }
+#else
+    (void)lists;
     while (rt_any16(active)) {
         steps -= as_uint16(active);
         int16 ci = rt_cell_index16(g, cx, cy, cz);
@@ -134,6 +197,7 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
         int16 inside = (cx >= 0) & (cx < nx) & (cy >= 0) & (cy < ny) & (cz >= 0) & (cz < nz);
         active = adv & inside & (P.tri == -1);
     }
+#endif
     uint a_steps[16], a_tests[16];
     int a_tri[16];
     float a_t[16], a_u[16], a_v[16];
@@ -162,19 +226,20 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
 __kernel void rt_trace_fused(SLUICE_PARAMS, global const rt_ray *rays, global rt_hit *hits,
                              global uint *maxima, global const uint *cell_start,
                              global const uint *cell_tris, global const float *tv,
-                             const rt_grid_args g)
+                             const rt_grid_args g, global const float *lists)
 {
 #ifdef RT_PACKET
     SLUICE_FOR_EACH_RANGE (b, e) {
         uint steps = 0u, tests = 0u;
         for (uint p = b; p < e; p += 16u)
             rt_trace_packet(&g, rays, p, min(16u, e - p), hits, maxima, cell_start, cell_tris, tv,
-                            &steps, &tests);
+                            lists, &steps, &tests);
         SLUICE_COUNT(0, steps);
         SLUICE_COUNT(1, tests);
         SLUICE_COUNT(2, e - b);
     }
 #else
+    (void)lists;
     SLUICE_FOR_EACH (i) {
         rt_rayp r = rt_prepare(&rays[i]);
         rt_best best = rt_no_hit(&r);
@@ -187,3 +252,20 @@ __kernel void rt_trace_fused(SLUICE_PARAMS, global const rt_ray *rays, global rt
     }
 #endif
 }
+
+#ifdef RT_LIST_COPY
+/* The copy of the triangle records in list order that the walk's turned
+ * test reads (rt_intersect16_turned): record j of entry k at
+ * lists[j * RT_LIST_STRIDE + k], the triangle index as plane 9. Launched over
+ * RT_LIST_STRIDE records, so the padding past the last entry is zeros. */
+__kernel void rt_list_records(SLUICE_PARAMS, global const uint *cell_tris, global const float *tv,
+                              uint entries, global float *lists)
+{
+    SLUICE_FOR_EACH (k) {
+        uint tri = k < entries ? cell_tris[k] : 0u;
+        for (uint j = 0; j < 9u; ++j)
+            lists[j * RT_LIST_STRIDE + k] = k < entries ? tv[9u * tri + j] : 0.0f;
+        lists[9u * RT_LIST_STRIDE + k] = as_float(tri);
+    }
+}
+#endif

@@ -406,8 +406,10 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                 /* the current voxel's list, as far as the budget goes */
                 uint16 stop = min(end, pos + ((uint16)RT_UNROLL_TESTS - tested));
                 stop = select(pos, stop, as_uint16(active));
-                rt_intersect16_lists(tv, cell_tris, as_int16(pos), as_int16(stop), active, &r,
-                                     limit);
+                /* lanes of a pass seldom share a list: each group its
+                 * cheaper test (5% faster on bunny than rt_intersect16_lists) */
+                rt_intersect16_lists_either(tv, 0, cell_tris, as_int16(pos), as_int16(stop), active,
+                                            &r, limit);
                 tested += stop - pos;
                 pos = stop;
                 /* budget spent inside the list: next intersect pass */
