@@ -466,7 +466,7 @@ static rt_tracer *make_tracer(const sluice_scene *sc, rt_exec exec, unsigned min
 }
 
 /* Frames per peer and round (see run_scene). */
-#define BENCH_BURST 3
+#define BENCH_BURST 8
 
 /* Keeps the best frame of the timed rounds: frame f of round `round`, where
  * round 0 is a warm-up. */
@@ -631,8 +631,12 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
      * data in cache, its threads awake: on these shared 2-core machines a
      * frame after an idle or single-threaded spell was up to 50% slower, for
      * every peer), and a slow spell of the machine falls on all peers alike
-     * rather than on whichever ran then. Round 0 is a warm-up; every time is
-     * the best frame of the other `reps` rounds. */
+     * rather than on whichever ran then. The bursts are 8 frames because
+     * Sluice's frames (bunny, fused) came down gradually over the first 5-8
+     * of a burst, after the C tracer's frames as after 200 ms of sleep (from
+     * about 7.5 to 5 ms), where Embree's were flat from the first. Round 0
+     * is a warm-up; every time is the best frame of the other `reps`
+     * rounds. */
     for (unsigned r = 0; r <= reps; ++r) {
         for (unsigned f = 0; f < BENCH_BURST; ++f)
             keep_best(&res->fused_s, r, f, sluice_frame(tf, rays_s, n, hits_f));
