@@ -466,7 +466,7 @@ static rt_tracer *make_tracer(const sluice_scene *sc, rt_exec exec, unsigned min
 }
 
 /* Frames per peer and round (see run_scene). */
-#define BENCH_BURST 8
+#define BENCH_BURST 8u
 
 /* Keeps the best frame of the timed rounds: frame f of round `round`, where
  * round 0 is a warm-up. */
@@ -946,13 +946,13 @@ int main(int argc, char **argv)
         fprintf(f,
                 "  \"setup\": {\"width\": %u, \"height\": %u, \"rays_per_pixel\": 1, \"rays\": "
                 "\"primary, through the pixel centres, the scene's camera, 8x8-tile order\", "
-                "\"reps\": %u, \"timing\": \"interleaved rounds, each timing every peer for 3 "
+                "\"reps\": %u, \"timing\": \"interleaved rounds, each timing every peer for %u "
                 "frames back to back; the best frame of reps rounds after a warm-up round; "
                 "Sluice: trace only, "
                 "rays and hits in device streams\", \"grid_min_dim\": \"auto "
                 "(rt_grid_auto_min_dim_edge with rt_grid_edge_quartile, per scene)\", \"quick\": "
                 "%s},\n",
-                size, size, reps, quick ? "true" : "false");
+                size, size, reps, BENCH_BURST, quick ? "true" : "false");
 #ifdef HAVE_EMBREE
         fprintf(f,
                 "  \"embree\": {\"available\": true, \"version\": \"%s\", \"build_quality\": "
