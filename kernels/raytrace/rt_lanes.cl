@@ -53,6 +53,12 @@ inline int16 rt_gather_i(global const uint *p, int16 idx, int16 m)
 #endif
 }
 
+/* The number of the lowest set bit of m (m != 0). */
+inline int rt_lowest_bit(uint m)
+{
+    return 31 - (int)clz(m & (0u - m));
+}
+
 /* The value of x in the first lane set in mask am (am != 0). */
 inline int rt_first_lane(int16 x, ushort am)
 {
@@ -62,7 +68,7 @@ inline int rt_first_lane(int16 x, ushort am)
 #else
     int l[16];
     vstore16(x, 0, l);
-    return l[31 - clz((uint)am & (0u - (uint)am))];
+    return l[rt_lowest_bit((uint)am)];
 #endif
 }
 
@@ -76,12 +82,6 @@ inline float16 rt_lane_bcast(float16 x, int l)
     vstore16(x, 0, a);
     return (float16)a[l];
 #endif
-}
-
-/* The number of the lowest set bit of m (m != 0). */
-inline int rt_lowest_bit(uint m)
-{
-    return 31 - (int)clz(m & (0u - m));
 }
 
 /* Whether any lane of a mask (lanes 0 or -1) is set: one mask test on
