@@ -194,25 +194,28 @@ static void check_against_bf(const char *name, const sluice_scene *s, rt_ray *ra
     for (size_t i = 0; i < nbf; ++i)
         bf_trace(s, &rays[i], &ref[i]);
     rt_hit *first = malloc(n * sizeof *first);
-    /* the stream mode, then every way the fused mode can traverse: a voxel
-     * at a time, walking ahead with the list copy, and without it */
+    /* the stream mode with the list copy and without it, then every way the
+     * fused mode can traverse: a voxel at a time, walking ahead with the
+     * list copy, and without it */
     static const struct {
         const char *name;
+        rt_exec exec;
         rt_fused_walk walk;
         size_t copy_max;
-    } paths[] = {{"stream", RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT},
-                 {"fused voxel", RT_WALK_OFF, RT_LIST_COPY_MAX_DEFAULT},
-                 {"fused walk", RT_WALK_ON, RT_LIST_COPY_MAX_DEFAULT},
-                 {"fused walk, gather", RT_WALK_ON, 0}};
-    for (int e = 0; e < 4; ++e) {
-        rt_tracer *t = make_tracer_walk(s, e ? RT_EXEC_FUSED : RT_EXEC_STREAM, RT_ISECT_MT,
-                                        RT_MODE_CAST, paths[e].walk, paths[e].copy_max);
+        const char *path; /* what rt_tracer_fused_path says */
+    } paths[] = {
+        {"stream", RT_EXEC_STREAM, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT, ""},
+        {"stream, gather", RT_EXEC_STREAM, RT_WALK_AUTO, 0, ""},
+        {"fused voxel", RT_EXEC_FUSED, RT_WALK_OFF, RT_LIST_COPY_MAX_DEFAULT, "a voxel at a time"},
+        {"fused walk", RT_EXEC_FUSED, RT_WALK_ON, RT_LIST_COPY_MAX_DEFAULT, "list copy"},
+        {"fused walk, gather", RT_EXEC_FUSED, RT_WALK_ON, 0, "no list copy"}};
+    for (size_t e = 0; e < sizeof paths / sizeof *paths; ++e) {
+        rt_tracer *t = make_tracer_walk(s, paths[e].exec, RT_ISECT_MT, RT_MODE_CAST, paths[e].walk,
+                                        paths[e].copy_max);
         if (!t)
             break;
-        CHECK(e == 0 || strstr(rt_tracer_fused_path(t), e == 1   ? "a voxel at a time"
-                                                        : e == 2 ? "list copy"
-                                                                 : "no list copy"),
-              "%s: fused path \"%s\"", paths[e].name, rt_tracer_fused_path(t));
+        CHECK(strstr(rt_tracer_fused_path(t), paths[e].path), "%s: fused path \"%s\"",
+              paths[e].name, rt_tracer_fused_path(t));
         CHECK_OK(ctx, rt_tracer_trace(t, rays, n, got));
         cmp_result c;
         char what[128];

@@ -154,6 +154,9 @@ static sluice_status prepare(rt_tracer *t, size_t n)
         st = sluice_kernel_set_stream(t->k_intersect, 8, t->tri_vertices, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(t->k_intersect, 9, sizeof t->grid_args, &t->grid_args);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(t->k_intersect, 10,
+                                      t->list_records ? t->list_records : t->tri_vertices, 0);
 
     /* rt_route(codes, ids, trav, isect): after a traverse pass into
      * (trav_out, isect_in), after an intersect pass into (trav_in,

@@ -56,8 +56,8 @@ typedef enum rt_fused_walk {
     RT_WALK_ON = 2    /**< walk ahead: step 4 voxels, then test them in order */
 } rt_fused_walk;
 
-/** Largest copy of the triangle records in list order that a walking fused
- *  tracer makes by default (rt_tracer_options.list_copy_max). */
+/** Largest copy of the triangle records in list order that a tracer makes by
+ *  default (rt_tracer_options.list_copy_max). */
 #define RT_LIST_COPY_MAX_DEFAULT ((size_t)64 << 20)
 
 /** Options of rt_tracer_create(); start from rt_tracer_options_default(). */
@@ -79,17 +79,18 @@ typedef struct rt_tracer_options {
      *  grids (bunny 10-20%, teapotahedron 20%), slower on dense ones
      *  (cornell 25%), hence RT_WALK_AUTO's rule (bench_raytrace). */
     rt_fused_walk fused_walk;
-    /** Walking ahead: the most bytes of the list-order copy of the triangle
-     *  records (40 per grid entry) that its turned tests read; past this,
-     *  they gather through the lists instead (about 8% slower on bunny). */
+    /** Moller-Trumbore, fused mode walking ahead or stream mode: the most
+     *  bytes of the list-order copy of the triangle records (40 per grid
+     *  entry) that their turned tests read; past this, they gather through
+     *  the lists instead (bunny about 8% slower fused, 2-6% stream). */
     size_t list_copy_max;
 } rt_tracer_options;
 
 /** Defaults: stream, Moller-Trumbore, device grid, RT_GRID_AUTO_MIN_DIM,
- *  threshold 0.2 (Purcell 4.1.2), k = 16 voxels and m = 32 triangle tests
+ *  threshold 0.2 (Purcell 4.1.2), k = 32 voxels and m = 64 triangle tests
  *  per pass (Purcell's own k = m = 1 passes are 2-10x more: measured slower
- *  here; m = 32 against 16 took stream mode from 0.29-0.39 to 0.30-0.46 of
- *  fused on cornell and from 0.35-0.40 to 0.41-0.47 on bunny, bench_raytrace),
+ *  here; k = 32, m = 64 against 16 and 32 measured 12-28% faster on bunny,
+ *  teapotahedron and spheres:1000, cornell within noise, tracer.c),
  *  unordered, RT_MODE_SHADOW, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT. */
 rt_tracer_options rt_tracer_options_default(void);
 

@@ -364,12 +364,13 @@ inline uint rt_intersect_one(const rt_grid_args *g, global const rt_ray *rays, g
  * traversal would) and its list goes on with the budget left, so the ray
  * stays in the intersect stream instead of ping-ponging through traversal.
  * Blocks of 16 rays run in lanes (Moller-Trumbore; the watertight test runs
- * ray by ray). */
+ * ray by ray). `lists` is the list-order copy of the triangle records when
+ * the program is built with RT_LIST_COPY (rt_intersect16_turned). */
 __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *codes,
                            global rt_walk *walk, global const rt_ray *rays, global rt_hit *hits,
                            global uint *maxima, global const uint *cell_start,
                            global const uint *cell_tris, global const float *tv,
-                           const rt_grid_args g)
+                           const rt_grid_args g, global const float *lists)
 {
     SLUICE_FOR_EACH_RANGE (lo, hi) {
         uint i = lo, tested_all = 0u, visited_all = 0u, done_all = 0u;
@@ -407,9 +408,10 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                 uint16 stop = min(end, pos + ((uint16)RT_UNROLL_TESTS - tested));
                 stop = select(pos, stop, as_uint16(active));
                 /* lanes of a pass seldom share a list: each group its
-                 * cheaper test (5% faster on bunny than rt_intersect16_lists) */
-                rt_intersect16_lists_either(tv, 0, cell_tris, as_int16(pos), as_int16(stop), active,
-                                            &r, limit);
+                 * cheaper test (5% faster on bunny than rt_intersect16_lists;
+                 * the turned tests reading the list copy, 2-6% more) */
+                rt_intersect16_lists_either(tv, lists, cell_tris, as_int16(pos), as_int16(stop),
+                                            active, &r, limit);
                 tested += stop - pos;
                 pos = stop;
                 /* budget spent inside the list: next intersect pass */
