@@ -20,10 +20,10 @@ rt_tracer_options rt_tracer_options_default(void)
     o.grid_build = RT_GRID_BUILD_DEVICE;
     o.grid_min_dim = RT_GRID_AUTO_MIN_DIM;
     o.intersect_threshold = 0.2f;
-    /* k = 32, m = 64: against 16 and 32, 14-27% faster on bunny, 18-28% on
-     * teapotahedron, 12-19% on spheres:1000, the Cornell box within noise
+    /* k = 32, m = 64: against 16 and 32, 18-27% faster on bunny, 20-22% on
+     * teapotahedron, 14-19% on spheres:1000, the Cornell box within noise
      * (bench_raytrace's stream tracer, two tracers alternating in one
-     * process); 64 and 128 were no better */
+     * process); k = 64 or m = 128 were no better */
     o.unroll_steps = 32;
     o.unroll_tests = 64;
     o.ordered = 0;

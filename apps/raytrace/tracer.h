@@ -89,7 +89,7 @@ typedef struct rt_tracer_options {
 /** Defaults: stream, Moller-Trumbore, device grid, RT_GRID_AUTO_MIN_DIM,
  *  threshold 0.2 (Purcell 4.1.2), k = 32 voxels and m = 64 triangle tests
  *  per pass (Purcell's own k = m = 1 passes are 2-10x more: measured slower
- *  here; k = 32, m = 64 against 16 and 32 measured 12-28% faster on bunny,
+ *  here; k = 32, m = 64 against 16 and 32 measured 14-27% faster on bunny,
  *  teapotahedron and spheres:1000, cornell within noise, tracer.c),
  *  unordered, RT_MODE_SHADOW, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT. */
 rt_tracer_options rt_tracer_options_default(void);
