@@ -322,6 +322,8 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     SKIP(mode == RT_MODE_CAST, "shadow pass (cast mode)");
     SKIP(!ss->has_normals, "normal interpolation (no vertex normals)");
     SKIP(1, "empty voxels (never sent to the intersector)");
+    SKIP(t->opt.exec == RT_EXEC_STREAM && t->opt.intersector == RT_ISECT_MT && !t->list_stride,
+         "list-order copy of the triangle records (over list_copy_max: intersect passes gather)");
 #undef SKIP
     static const char *const names[] = {"rt_types.h",   "rt_trace.cl", "rt_lanes.cl",
                                         "rt_stream.cl", "rt_fused.cl", "rt_shade.cl"};
