@@ -367,8 +367,9 @@ static int cmp_u64(const void *x, const void *y)
     return a < b ? -1 : a > b;
 }
 
-/* Non-zero when every undirected edge is shared by exactly two triangles. */
-static int is_closed(const sluice_scene *s)
+/* The three undirected edges of every triangle (a << 32 | b with a < b),
+ * sorted, so that an edge's triangles are neighbours; 3 per triangle. */
+static uint64_t *sorted_edges(const sluice_scene *s)
 {
     size_t nt = sluice_scene_triangle_count(s);
     const uint32_t *ix = sluice_scene_indices(s);
@@ -379,6 +380,14 @@ static int is_closed(const sluice_scene *s)
             e[3 * i + k] = a < b ? (a << 32 | b) : (b << 32 | a);
         }
     qsort(e, 3 * nt, sizeof *e, cmp_u64);
+    return e;
+}
+
+/* Non-zero when every undirected edge is shared by exactly two triangles. */
+static int is_closed(const sluice_scene *s)
+{
+    size_t nt = sluice_scene_triangle_count(s);
+    uint64_t *e = sorted_edges(s);
     int closed = 1;
     for (size_t i = 0; i < 3 * nt;) {
         size_t j = i;
@@ -401,14 +410,7 @@ static const char *const lk_names[LK_CATEGORIES] = {"random directions", "at ver
 static uint64_t *unique_edges(const sluice_scene *s, size_t *count)
 {
     size_t nt = sluice_scene_triangle_count(s);
-    const uint32_t *ix = sluice_scene_indices(s);
-    uint64_t *e = malloc(3 * nt * sizeof *e);
-    for (size_t i = 0; i < nt; ++i)
-        for (int k = 0; k < 3; ++k) {
-            uint64_t a = ix[3 * i + k], b = ix[3 * i + (k + 1) % 3];
-            e[3 * i + k] = a < b ? (a << 32 | b) : (b << 32 | a);
-        }
-    qsort(e, 3 * nt, sizeof *e, cmp_u64);
+    uint64_t *e = sorted_edges(s);
     size_t m = 0;
     for (size_t i = 0; i < 3 * nt; ++i)
         if (m == 0 || e[i] != e[m - 1])
