@@ -60,24 +60,24 @@ static int run_scene(sluice_context *ctx, const char *name, unsigned min_dim, un
                      result *r)
 {
     char err[512];
-    sluice_scene_load_options o = {0};
-    o.flags = SLUICE_SCENE_ALLOW_NO_LIGHT;
-    sluice_scene *sc = NULL;
-    if (sluice_scene_load(name, &o, &sc, err, sizeof err) != SLUICE_OK) {
+    sr_scene_load_options o = {0};
+    o.flags = SR_SCENE_ALLOW_NO_LIGHT;
+    sr_scene *sc = NULL;
+    if (sr_scene_load(name, &o, &sc, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, "bench_grid: %s\n", err);
         return 0;
     }
-    const sluice_scene_stats *st = sluice_scene_statistics(sc);
+    const sr_scene_stats *st = sr_scene_statistics(sc);
     rt_grid_desc d;
     if (rt_grid_choose(st->bounds_min, st->bounds_max, min_dim, &d, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, "bench_grid: %s: %s\n", name, err);
-        sluice_scene_destroy(sc);
+        sr_scene_destroy(sc);
         return 0;
     }
-    size_t nt = sluice_scene_triangle_count(sc), nv = sluice_scene_vertex_count(sc);
+    size_t nt = sr_scene_triangle_count(sc), nv = sr_scene_vertex_count(sc);
     size_t cells = (size_t)d.dims[0] * d.dims[1] * d.dims[2];
-    const float *pos = sluice_scene_positions(sc);
-    const uint32_t *idx = sluice_scene_indices(sc);
+    const float *pos = sr_scene_positions(sc);
+    const uint32_t *idx = sr_scene_indices(sc);
     memset(r, 0, sizeof *r);
     r->scene = name;
     r->triangles = nt;
@@ -134,7 +134,7 @@ static int run_scene(sluice_context *ctx, const char *name, unsigned min_dim, un
     rt_grid_host_free(&h);
     sluice_stream_destroy(sp);
     sluice_stream_destroy(si);
-    sluice_scene_destroy(sc);
+    sr_scene_destroy(sc);
     return ok;
 }
 

@@ -92,11 +92,11 @@ static void *xmalloc(size_t n)
 
 /* One ray per pixel through its centre, in 8x8 tiles as the renderer's
  * rt_raygen orders them (neighbouring rays are neighbours in the stream). */
-static rt_ray *eye_rays(const sluice_scene *sc, unsigned w, unsigned h)
+static rt_ray *eye_rays(const sr_scene *sc, unsigned w, unsigned h)
 {
     rt_frame f;
     memset(&f, 0, sizeof f);
-    rt_camera_frame(sluice_scene_camera(sc), w, h, &f);
+    rt_camera_frame(sr_scene_camera(sc), w, h, &f);
     rt_ray *rays = xmalloc((size_t)w * h * sizeof *rays);
     size_t n = 0;
     for (unsigned ty = 0; ty < h; ty += 8)
@@ -224,7 +224,7 @@ RT_MT_REF_FAST static void c_trace(const cgrid *g, const rt_ray *ray, rt_hit *hi
     hit->tests = tests;
 }
 
-static void cgrid_init(cgrid *g, const rt_grid_host *h, const sluice_scene *sc)
+static void cgrid_init(cgrid *g, const rt_grid_host *h, const sr_scene *sc)
 {
     for (int k = 0; k < 3; ++k) {
         g->lo[k] = h->desc.lo[k];
@@ -235,9 +235,9 @@ static void cgrid_init(cgrid *g, const rt_grid_host *h, const sluice_scene *sc)
     }
     g->start = h->cell_start;
     g->tris = h->cell_tris;
-    size_t nt = sluice_scene_triangle_count(sc);
-    const float *pos = sluice_scene_positions(sc);
-    const uint32_t *idx = sluice_scene_indices(sc);
+    size_t nt = sr_scene_triangle_count(sc);
+    const float *pos = sr_scene_positions(sc);
+    const uint32_t *idx = sr_scene_indices(sc);
     g->tv = xmalloc(9 * nt * sizeof *g->tv);
     for (size_t i = 0; i < nt; ++i)
         for (int j = 0; j < 3; ++j)
@@ -428,21 +428,21 @@ static double agree_t(const peer_hits *a, const peer_hits *b, size_t n)
 }
 #endif
 
-static sluice_scene *load_scene(const char *name)
+static sr_scene *load_scene(const char *name)
 {
     char err[512];
-    sluice_scene_load_options o = {0};
-    o.flags = SLUICE_SCENE_ALLOW_NO_LIGHT;
-    sluice_scene *sc = NULL;
-    if (sluice_scene_load(name, &o, &sc, err, sizeof err) != SLUICE_OK) {
+    sr_scene_load_options o = {0};
+    o.flags = SR_SCENE_ALLOW_NO_LIGHT;
+    sr_scene *sc = NULL;
+    if (sr_scene_load(name, &o, &sc, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, PROG ": %s\n", err);
         return NULL;
     }
     return sc;
 }
 
-static rt_tracer *make_tracer(const sluice_scene *sc, rt_exec exec, unsigned min_dim,
-                              unsigned unroll, double *seconds)
+static rt_tracer *make_tracer(const sr_scene *sc, rt_exec exec, unsigned min_dim, unsigned unroll,
+                              double *seconds)
 {
     char err[512];
     rt_tracer_options o = rt_tracer_options_default();
@@ -513,11 +513,11 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
 {
     char err[512];
     memset(res, 0, sizeof *res);
-    sluice_scene *sc = load_scene(name);
+    sr_scene *sc = load_scene(name);
     if (!sc)
         return 0;
     res->name = name;
-    res->triangles = sluice_scene_triangle_count(sc);
+    res->triangles = sr_scene_triangle_count(sc);
     res->w = res->h = size;
     size_t n = (size_t)size * size;
     rt_ray *rays = eye_rays(sc, size, size);
@@ -526,12 +526,12 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
         by_pixel[rays[i].pixel] = rays[i];
 
     /* the grid: plain C build (also the C tracer's) and the device build */
-    const sluice_scene_stats *ss = sluice_scene_statistics(sc);
+    const sr_scene_stats *ss = sr_scene_statistics(sc);
     /* The tracer's default resolution (rt_grid_auto_min_dim_edge), for all peers
      * that use a grid. */
     unsigned min_dim = rt_grid_auto_min_dim_edge(
         ss->bounds_min, ss->bounds_max, ss->triangles,
-        rt_grid_edge_quartile(sluice_scene_positions(sc), sluice_scene_indices(sc), ss->triangles));
+        rt_grid_edge_quartile(sr_scene_positions(sc), sr_scene_indices(sc), ss->triangles));
     res->min_dim = min_dim;
     rt_grid_desc desc;
     if (rt_grid_choose(ss->bounds_min, ss->bounds_max, min_dim, &desc, err, sizeof err) !=
@@ -544,8 +544,8 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     for (unsigned r = 0; r <= reps; ++r) {
         rt_grid_host_free(&gh);
         double t0 = now();
-        if (rt_grid_build_host(&desc, sluice_scene_positions(sc), sluice_scene_indices(sc),
-                               res->triangles, &gh, err, sizeof err) != SLUICE_OK) {
+        if (rt_grid_build_host(&desc, sr_scene_positions(sc), sr_scene_indices(sc), res->triangles,
+                               &gh, err, sizeof err) != SLUICE_OK) {
             fprintf(stderr, PROG ": %s: grid: %s\n", name, err);
             exit(2);
         }
@@ -555,12 +555,12 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     size_t cells = (size_t)desc.dims[0] * desc.dims[1] * desc.dims[2];
     res->grid_entries = gh.cell_start[cells];
     {
-        size_t nv = sluice_scene_vertex_count(sc);
+        size_t nv = sr_scene_vertex_count(sc);
         sluice_stream *sp = NULL, *si = NULL;
         TRY(sluice_stream_create(ctx, 12, nv, &sp));
         TRY(sluice_stream_create(ctx, 12, res->triangles, &si));
-        TRY(sluice_stream_upload(sp, sluice_scene_positions(sc), nv));
-        TRY(sluice_stream_upload(si, sluice_scene_indices(sc), res->triangles));
+        TRY(sluice_stream_upload(sp, sr_scene_positions(sc), nv));
+        TRY(sluice_stream_upload(si, sr_scene_indices(sc), res->triangles));
         for (unsigned r = 0; r <= reps; ++r) {
             rt_grid_device g = {0};
             TRY(sluice_context_finish(ctx));
@@ -601,7 +601,7 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     RTCScene es = rtcNewScene(dev);
     rtcSetSceneBuildQuality(es, RTC_BUILD_QUALITY_HIGH);
     RTCGeometry geo = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-    size_t nv = sluice_scene_vertex_count(sc);
+    size_t nv = sr_scene_vertex_count(sc);
     float *vb = rtcSetNewGeometryBuffer(geo, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                         3 * sizeof(float), nv);
     uint32_t *ib = rtcSetNewGeometryBuffer(geo, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
@@ -610,8 +610,8 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
         fprintf(stderr, PROG ": Embree buffers: error %d\n", (int)rtcGetDeviceError(dev));
         exit(2);
     }
-    memcpy(vb, sluice_scene_positions(sc), 3 * nv * sizeof(float));
-    memcpy(ib, sluice_scene_indices(sc), 3 * res->triangles * sizeof(uint32_t));
+    memcpy(vb, sr_scene_positions(sc), 3 * nv * sizeof(float));
+    memcpy(ib, sr_scene_indices(sc), 3 * res->triangles * sizeof(uint32_t));
     double t0 = now();
     rtcCommitGeometry(geo);
     rtcAttachGeometry(es, geo);
@@ -695,7 +695,7 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     hits_free(&cref);
     free(rays);
     free(by_pixel);
-    sluice_scene_destroy(sc);
+    sr_scene_destroy(sc);
     return 1;
 }
 
@@ -717,7 +717,7 @@ typedef struct purcell_row {
 
 static int purcell_run(const char *name, unsigned size, unsigned min_dim, purcell_row *row)
 {
-    sluice_scene *sc = load_scene(name);
+    sr_scene *sc = load_scene(name);
     if (!sc)
         return 0;
     size_t n = (size_t)size * size;
@@ -751,7 +751,7 @@ static int purcell_run(const char *name, unsigned size, unsigned min_dim, purcel
     rt_tracer_destroy(t);
     free(rays);
     free(hits);
-    sluice_scene_destroy(sc);
+    sr_scene_destroy(sc);
     return 1;
 }
 

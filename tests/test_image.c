@@ -99,15 +99,15 @@ static int exists(const char *path)
 }
 
 /* An image filled with one value in every colour channel (alpha 1). */
-static sluice_image *uniform(unsigned w, unsigned h, unsigned c, float v)
+static sr_image *uniform(unsigned w, unsigned h, unsigned c, float v)
 {
-    sluice_image *img = NULL;
+    sr_image *img = NULL;
     char err[256];
-    if (sluice_image_create(w, h, c, &img, err, sizeof err) != SLUICE_OK) {
+    if (sr_image_create(w, h, c, &img, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, "cannot create an image: %s\n", err);
         exit(2);
     }
-    float *p = sluice_image_pixels(img);
+    float *p = sr_image_pixels(img);
     for (size_t i = 0; i < (size_t)w * h * c; ++i)
         p[i] = (c == 4 && i % 4 == 3) ? 1.0f : v;
     return img;
@@ -116,57 +116,54 @@ static sluice_image *uniform(unsigned w, unsigned h, unsigned c, float v)
 static void test_create(void)
 {
     char err[256];
-    sluice_image *img = (sluice_image *)&err; /* must be reset to NULL */
-    CHECK(sluice_image_create(0, 0, 3, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
+    sr_image *img = (sr_image *)&err; /* must be reset to NULL */
+    CHECK(sr_image_create(0, 0, 3, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "0x0 accepted");
     CHECK(img == NULL, "out not NULL after a failure");
-    CHECK(sluice_image_create(5, 0, 3, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
+    CHECK(sr_image_create(5, 0, 3, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "5x0 accepted");
     err[0] = 0;
-    CHECK(sluice_image_create(1000000, 1000000, 3, &img, err, sizeof err) ==
+    CHECK(sr_image_create(1000000, 1000000, 3, &img, err, sizeof err) ==
               SLUICE_ERROR_INVALID_ARGUMENT,
           "10^6 x 10^6 accepted");
     CHECK(strstr(err, "1000000x1000000") && strstr(err, "too large"), "message: %s", err);
-    CHECK(sluice_image_create(65537, 1, 3, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
+    CHECK(sr_image_create(65537, 1, 3, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "65537 wide accepted");
-    CHECK(sluice_image_create(65536, 65536, 3, &img, err, sizeof err) ==
-              SLUICE_ERROR_INVALID_ARGUMENT,
+    CHECK(sr_image_create(65536, 65536, 3, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "2^32 pixels accepted");
-    CHECK(sluice_image_create(4, 4, 2, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
+    CHECK(sr_image_create(4, 4, 2, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "2 channels accepted");
-    CHECK(sluice_image_create(4, 4, 3, NULL, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
+    CHECK(sr_image_create(4, 4, 3, NULL, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "NULL out accepted");
     /* NULL or empty error buffers are allowed. */
-    CHECK(sluice_image_create(0, 1, 3, &img, NULL, 0) == SLUICE_ERROR_INVALID_ARGUMENT, "no err");
+    CHECK(sr_image_create(0, 1, 3, &img, NULL, 0) == SLUICE_ERROR_INVALID_ARGUMENT, "no err");
 
-    CHECK(sluice_image_create(7, 5, 4, &img, err, sizeof err) == SLUICE_OK, "7x5x4: %s", err);
-    CHECK(sluice_image_width(img) == 7 && sluice_image_height(img) == 5 &&
-              sluice_image_channels(img) == 4,
+    CHECK(sr_image_create(7, 5, 4, &img, err, sizeof err) == SLUICE_OK, "7x5x4: %s", err);
+    CHECK(sr_image_width(img) == 7 && sr_image_height(img) == 5 && sr_image_channels(img) == 4,
           "accessors");
     int zero = 1;
     for (size_t i = 0; i < 7 * 5 * 4; ++i)
-        zero &= sluice_image_pixels_const(img)[i] == 0.0f;
+        zero &= sr_image_pixels_const(img)[i] == 0.0f;
     CHECK(zero, "not zero-filled");
-    CHECK(sluice_image_pixels(img) == sluice_image_pixels_const(img), "two pixel views");
-    sluice_image_destroy(img);
-    sluice_image_destroy(NULL);
-    CHECK(sluice_image_width(NULL) == 0 && sluice_image_pixels(NULL) == NULL, "NULL accessors");
+    CHECK(sr_image_pixels(img) == sr_image_pixels_const(img), "two pixel views");
+    sr_image_destroy(img);
+    sr_image_destroy(NULL);
+    CHECK(sr_image_width(NULL) == 0 && sr_image_pixels(NULL) == NULL, "NULL accessors");
 }
 
 static void test_srgb(void)
 {
-    CHECK(sluice_srgb_encode(0.0f) == 0.0f && sluice_srgb_encode(1.0f) == 1.0f, "encode ends");
-    CHECK(sluice_srgb_encode(NAN) == 0.0f && sluice_srgb_encode(-1.0f) == 0.0f &&
-              sluice_srgb_encode(7.0f) == 1.0f,
+    CHECK(sr_srgb_encode(0.0f) == 0.0f && sr_srgb_encode(1.0f) == 1.0f, "encode ends");
+    CHECK(sr_srgb_encode(NAN) == 0.0f && sr_srgb_encode(-1.0f) == 0.0f &&
+              sr_srgb_encode(7.0f) == 1.0f,
           "encode clamps");
-    CHECK(fabsf(sluice_srgb_encode(0.002f) - 0.002f * 12.92f) < 1e-7f, "linear segment");
+    CHECK(fabsf(sr_srgb_encode(0.002f) - 0.002f * 12.92f) < 1e-7f, "linear segment");
     /* 18% grey encodes to about 0.4614 (46% of the scale). */
-    CHECK(fabsf(sluice_srgb_encode(0.18f) - 0.4614f) < 1e-3f, "18%% grey: %g",
-          sluice_srgb_encode(0.18f));
+    CHECK(fabsf(sr_srgb_encode(0.18f) - 0.4614f) < 1e-3f, "18%% grey: %g", sr_srgb_encode(0.18f));
     float worst = 0.0f;
     for (int i = 0; i <= 1000; ++i) {
         float x = (float)i / 1000.0f;
-        float e = fabsf(sluice_srgb_decode(sluice_srgb_encode(x)) - x);
+        float e = fabsf(sr_srgb_decode(sr_srgb_encode(x)) - x);
         worst = e > worst ? e : worst;
     }
     CHECK(worst < 1e-6f, "decode(encode(x)) off by %g", worst);
@@ -190,29 +187,29 @@ static void test_exr(void)
     char err[512];
     uint32_t seed = 2024u;
     for (unsigned c = 3; c <= 4; ++c) {
-        sluice_image *img = uniform(7, 5, c, 0.0f), *back = NULL;
-        float *p = sluice_image_pixels(img);
+        sr_image *img = uniform(7, 5, c, 0.0f), *back = NULL;
+        float *p = sr_image_pixels(img);
         for (size_t i = 0; i < 7 * 5 * c; ++i)
             p[i] = awkward_float(&seed, i);
         const char *path = in_dir(c == 3 ? "rgb.exr" : "RGBA.EXR");
-        CHECK(sluice_image_write(img, path, err, sizeof err) == SLUICE_OK, "write: %s", err);
-        CHECK(sluice_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read: %s", err);
+        CHECK(sr_image_write(img, path, err, sizeof err) == SLUICE_OK, "write: %s", err);
+        CHECK(sr_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read: %s", err);
         if (back) {
-            CHECK(sluice_image_width(back) == 7 && sluice_image_height(back) == 5 &&
-                      sluice_image_channels(back) == c,
-                  "exr %u channels: read back %ux%ux%u", c, sluice_image_width(back),
-                  sluice_image_height(back), sluice_image_channels(back));
-            if (sluice_image_channels(back) == c) {
+            CHECK(sr_image_width(back) == 7 && sr_image_height(back) == 5 &&
+                      sr_image_channels(back) == c,
+                  "exr %u channels: read back %ux%ux%u", c, sr_image_width(back),
+                  sr_image_height(back), sr_image_channels(back));
+            if (sr_image_channels(back) == c) {
                 size_t bad = 0, first = 0;
                 for (size_t i = 0; i < 7 * 5 * c; ++i)
-                    if (memcmp(&p[i], &sluice_image_pixels_const(back)[i], 4) && bad++ == 0)
+                    if (memcmp(&p[i], &sr_image_pixels_const(back)[i], 4) && bad++ == 0)
                         first = i;
                 CHECK(bad == 0, "exr %u channels: %zu values differ, first [%zu] %a vs %a", c, bad,
-                      first, p[first], sluice_image_pixels_const(back)[first]);
+                      first, p[first], sr_image_pixels_const(back)[first]);
             }
         }
-        sluice_image_destroy(back);
-        sluice_image_destroy(img);
+        sr_image_destroy(back);
+        sr_image_destroy(img);
     }
 }
 
@@ -220,22 +217,22 @@ static void test_png(void)
 {
     char err[512];
     /* 0.214 linear is 0.49995 encoded: 127.49 of 255. */
-    sluice_image *img = uniform(4, 3, 4, 0.214f), *raw = NULL, *back = NULL;
-    float *p = sluice_image_pixels(img);
+    sr_image *img = uniform(4, 3, 4, 0.214f), *raw = NULL, *back = NULL;
+    float *p = sr_image_pixels(img);
     p[3] = 0.5f;  /* alpha is not encoded: 128 */
     p[4] = -1.0f; /* clamped to 0 */
     p[5] = 2.0f;  /* clamped to 255 */
     p[6] = NAN;   /* 0 */
     const char *path = in_dir("grey.png");
-    CHECK(sluice_image_write(img, path, err, sizeof err) == SLUICE_OK, "write png: %s", err);
-    CHECK(sluice_image_read_ex(path, SLUICE_IMAGE_READ_RAW, &raw, err, sizeof err) == SLUICE_OK,
+    CHECK(sr_image_write(img, path, err, sizeof err) == SLUICE_OK, "write png: %s", err);
+    CHECK(sr_image_read_ex(path, SR_IMAGE_READ_RAW, &raw, err, sizeof err) == SLUICE_OK,
           "read raw: %s", err);
-    CHECK(sluice_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read png: %s", err);
-    if (!raw || !back || sluice_image_channels(raw) != 4 || sluice_image_channels(back) != 4) {
-        CHECK(0, "png read back with %u channels", sluice_image_channels(raw));
+    CHECK(sr_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read png: %s", err);
+    if (!raw || !back || sr_image_channels(raw) != 4 || sr_image_channels(back) != 4) {
+        CHECK(0, "png read back with %u channels", sr_image_channels(raw));
         goto done;
     }
-    const float *r = sluice_image_pixels_const(raw), *b = sluice_image_pixels_const(back);
+    const float *r = sr_image_pixels_const(raw), *b = sr_image_pixels_const(back);
     /* Raw reads give stored / 255 as OpenImageIO computes it: round. */
     long stored = lrintf(r[0] * 255.0f);
     CHECK(fabsf(r[0] * 255.0f - (float)stored) < 1e-3f && (stored == 127 || stored == 128),
@@ -243,7 +240,7 @@ static void test_png(void)
     CHECK(lrintf(r[3] * 255.0f) == 128, "alpha stored as %g / 255", r[3] * 255.0f);
     CHECK(r[4] == 0.0f && r[5] == 1.0f && r[6] == 0.0f, "clamps: %g %g %g", r[4], r[5], r[6]);
     /* One 8-bit step around 127.5, in linear terms. */
-    float step = sluice_srgb_decode(128.0f / 255.0f) - sluice_srgb_decode(127.0f / 255.0f);
+    float step = sr_srgb_decode(128.0f / 255.0f) - sr_srgb_decode(127.0f / 255.0f);
     size_t bad = 0;
     for (size_t i = 8; i < 4 * 3 * 4; ++i)
         if (i % 4 != 3 && !(fabsf(b[i] - 0.214f) <= step))
@@ -252,17 +249,17 @@ static void test_png(void)
     CHECK(fabsf(b[3] - 0.5f) <= 0.5f / 255.0f + 1e-6f, "alpha read back as %g", b[3]);
     CHECK(fabsf(b[11] - 1.0f) == 0.0f, "opaque alpha read back as %g", b[11]);
 done:
-    sluice_image_destroy(raw);
-    sluice_image_destroy(back);
-    sluice_image_destroy(img);
+    sr_image_destroy(raw);
+    sr_image_destroy(back);
+    sr_image_destroy(img);
 }
 
 static void test_hdr(void)
 {
     char err[512];
     static const float values[] = {0.214f, 1.0f, 5.5f, 100.0f, 0.001f, 0.5f};
-    sluice_image *img = uniform(6, 2, 4, 0.0f), *back = NULL;
-    float *p = sluice_image_pixels(img);
+    sr_image *img = uniform(6, 2, 4, 0.0f), *back = NULL;
+    float *p = sr_image_pixels(img);
     for (size_t i = 0; i < 12; ++i) {
         p[i * 4 + 0] = values[i % 6];
         p[i * 4 + 1] = values[(i + 1) % 6];
@@ -272,10 +269,10 @@ static void test_hdr(void)
      * is good to about 1/256 of the pixel's largest; allow twice that. Were
      * the file decoded as sRGB, 0.214 would come back as 0.037. */
     const char *path = in_dir("light.hdr");
-    CHECK(sluice_image_write(img, path, err, sizeof err) == SLUICE_OK, "write hdr: %s", err);
-    CHECK(sluice_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read hdr: %s", err);
-    if (back && sluice_image_channels(back) == 3 && sluice_image_width(back) == 6) {
-        const float *b = sluice_image_pixels_const(back);
+    CHECK(sr_image_write(img, path, err, sizeof err) == SLUICE_OK, "write hdr: %s", err);
+    CHECK(sr_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read hdr: %s", err);
+    if (back && sr_image_channels(back) == 3 && sr_image_width(back) == 6) {
+        const float *b = sr_image_pixels_const(back);
         size_t bad = 0;
         for (size_t i = 0; i < 12; ++i) {
             float mx = fmaxf(p[i * 4], fmaxf(p[i * 4 + 1], p[i * 4 + 2]));
@@ -285,11 +282,11 @@ static void test_hdr(void)
         }
         CHECK(bad == 0, "hdr: %zu values off (first pixel %g %g %g)", bad, b[0], b[1], b[2]);
     } else {
-        CHECK(0, "hdr read back as %ux%ux%u", sluice_image_width(back), sluice_image_height(back),
-              sluice_image_channels(back));
+        CHECK(0, "hdr read back as %ux%ux%u", sr_image_width(back), sr_image_height(back),
+              sr_image_channels(back));
     }
-    sluice_image_destroy(back);
-    sluice_image_destroy(img);
+    sr_image_destroy(back);
+    sr_image_destroy(img);
 }
 
 /* Writes a PFM file by hand (OpenImageIO 2.4 cannot): "PF" (RGB) or "Pf"
@@ -316,41 +313,39 @@ static void test_pfm_read(void)
         grey[i] = (float)i * 1.5f;
     const char *path = in_dir("hand.pfm");
     write_pfm(path, 4, 3, 3, rgb);
-    sluice_image *back = NULL;
-    CHECK(sluice_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read pfm: %s", err);
-    if (back && sluice_image_channels(back) == 3 && sluice_image_width(back) == 4 &&
-        sluice_image_height(back) == 3)
-        CHECK(memcmp(sluice_image_pixels_const(back), rgb, sizeof rgb) == 0,
-              "pfm pixels differ (rows flipped?): %g %g", sluice_image_pixels_const(back)[0],
-              rgb[0]);
+    sr_image *back = NULL;
+    CHECK(sr_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read pfm: %s", err);
+    if (back && sr_image_channels(back) == 3 && sr_image_width(back) == 4 &&
+        sr_image_height(back) == 3)
+        CHECK(memcmp(sr_image_pixels_const(back), rgb, sizeof rgb) == 0,
+              "pfm pixels differ (rows flipped?): %g %g", sr_image_pixels_const(back)[0], rgb[0]);
     else
-        CHECK(0, "pfm read back as %ux%ux%u", sluice_image_width(back), sluice_image_height(back),
-              sluice_image_channels(back));
-    sluice_image_destroy(back);
+        CHECK(0, "pfm read back as %ux%ux%u", sr_image_width(back), sr_image_height(back),
+              sr_image_channels(back));
+    sr_image_destroy(back);
     back = NULL;
 
     /* One grey channel becomes RGB. */
     path = in_dir("grey.pfm");
     write_pfm(path, 4, 3, 1, grey);
-    CHECK(sluice_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read grey pfm: %s", err);
-    if (back && sluice_image_channels(back) == 3 && sluice_image_width(back) == 4) {
-        const float *b = sluice_image_pixels_const(back);
+    CHECK(sr_image_read(path, &back, err, sizeof err) == SLUICE_OK, "read grey pfm: %s", err);
+    if (back && sr_image_channels(back) == 3 && sr_image_width(back) == 4) {
+        const float *b = sr_image_pixels_const(back);
         size_t bad = 0;
         for (int i = 0; i < 12; ++i)
             bad += b[i * 3] != grey[i] || b[i * 3 + 1] != grey[i] || b[i * 3 + 2] != grey[i];
         CHECK(bad == 0, "grey pfm: %zu pixels not expanded to RGB", bad);
     } else {
-        CHECK(0, "grey pfm read back with %u channels", sluice_image_channels(back));
+        CHECK(0, "grey pfm read back with %u channels", sr_image_channels(back));
     }
-    sluice_image_destroy(back);
+    sr_image_destroy(back);
 
     /* Writing .pfm is refused up front, not half done. */
-    sluice_image *img = uniform(2, 2, 3, 1.0f);
-    CHECK(sluice_image_write(img, in_dir("out.pfm"), err, sizeof err) ==
-              SLUICE_ERROR_INVALID_ARGUMENT,
+    sr_image *img = uniform(2, 2, 3, 1.0f);
+    CHECK(sr_image_write(img, in_dir("out.pfm"), err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "pfm write: %s", err);
     CHECK(!exists(in_dir("out.pfm")), "out.pfm exists");
-    sluice_image_destroy(img);
+    sr_image_destroy(img);
 }
 
 static void test_atomic(void)
@@ -359,23 +354,23 @@ static void test_atomic(void)
     char sub[128];
     snprintf(sub, sizeof sub, "%s/atomic", dir);
     mkdir(sub, 0755);
-    sluice_image *img = uniform(3, 2, 3, 0.25f), *back = NULL;
+    sr_image *img = uniform(3, 2, 3, 0.25f), *back = NULL;
 
     /* Success: the target and nothing else. */
     char target[256];
     snprintf(target, sizeof target, "%s/out.png", sub);
-    CHECK(sluice_image_write(img, target, err, sizeof err) == SLUICE_OK, "write: %s", err);
+    CHECK(sr_image_write(img, target, err, sizeof err) == SLUICE_OK, "write: %s", err);
     CHECK(count_entries(sub, 0) == 1 && exists(target), "after a write: %d entries",
           count_entries(sub, 0));
     snprintf(target, sizeof target, "%s/out.exr", sub);
-    CHECK(sluice_image_write(img, target, err, sizeof err) == SLUICE_OK, "write: %s", err);
+    CHECK(sr_image_write(img, target, err, sizeof err) == SLUICE_OK, "write: %s", err);
     CHECK(count_entries(sub, 0) == 2 && count_entries(sub, 1) == 0, "temporary files left");
 
     /* A directory that does not exist. */
     char missing[256];
     snprintf(missing, sizeof missing, "%s/no-such-dir/out.png", sub);
     err[0] = 0;
-    CHECK(sluice_image_write(img, missing, err, sizeof err) == SLUICE_ERROR_IO,
+    CHECK(sr_image_write(img, missing, err, sizeof err) == SLUICE_ERROR_IO,
           "write into a missing directory");
     CHECK(strstr(err, missing) != NULL, "message does not name the path: %s", err);
     CHECK(count_entries(sub, 0) == 2, "something was left: %d entries", count_entries(sub, 0));
@@ -383,18 +378,18 @@ static void test_atomic(void)
     /* An unsupported extension. */
     snprintf(target, sizeof target, "%s/out.xyz", sub);
     err[0] = 0;
-    CHECK(sluice_image_write(img, target, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
+    CHECK(sr_image_write(img, target, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           ".xyz accepted");
     CHECK(strstr(err, target) && strstr(err, "'.xyz'"), "message: %s", err);
     snprintf(target, sizeof target, "%s/noext", sub);
-    CHECK(sluice_image_write(img, target, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
+    CHECK(sr_image_write(img, target, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "no extension accepted");
     CHECK(count_entries(sub, 0) == 2, "something was left: %d entries", count_entries(sub, 0));
 
     /* A failing write leaves the old file as it was ... */
     snprintf(target, sizeof target, "%s/old.png", sub);
     write_text(target, "the old contents");
-    CHECK(sluice_image_write(NULL, target, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
+    CHECK(sr_image_write(NULL, target, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "NULL image accepted");
     CHECK(strstr(err, target) != NULL, "message does not name the path: %s", err);
     CHECK(strcmp(read_text(target), "the old contents") == 0, "old file changed");
@@ -407,43 +402,42 @@ static void test_atomic(void)
     mkdir(blocker, 0755);
     write_text(inside, "kept");
     err[0] = 0;
-    CHECK(sluice_image_write(img, blocker, err, sizeof err) == SLUICE_ERROR_IO,
+    CHECK(sr_image_write(img, blocker, err, sizeof err) == SLUICE_ERROR_IO,
           "rename over a directory succeeded");
     CHECK(strstr(err, blocker) != NULL, "message does not name the path: %s", err);
     CHECK(count_entries(sub, 1) == 0, "temporary file left after a failed rename");
     CHECK(strcmp(read_text(inside), "kept") == 0, "directory contents changed");
 
     /* ... and a successful one replaces it. */
-    CHECK(sluice_image_write(img, target, err, sizeof err) == SLUICE_OK, "replace: %s", err);
-    CHECK(sluice_image_read(target, &back, err, sizeof err) == SLUICE_OK, "read: %s", err);
-    CHECK(back && sluice_image_width(back) == 3, "replaced file is not the image");
+    CHECK(sr_image_write(img, target, err, sizeof err) == SLUICE_OK, "replace: %s", err);
+    CHECK(sr_image_read(target, &back, err, sizeof err) == SLUICE_OK, "read: %s", err);
+    CHECK(back && sr_image_width(back) == 3, "replaced file is not the image");
     CHECK(count_entries(sub, 1) == 0, "temporary files left");
-    sluice_image_destroy(back);
-    sluice_image_destroy(img);
+    sr_image_destroy(back);
+    sr_image_destroy(img);
 }
 
 static void test_read_errors(void)
 {
     char err[512];
-    sluice_image *img = (sluice_image *)&err;
+    sr_image *img = (sr_image *)&err;
     const char *missing = in_dir("missing.exr");
     err[0] = 0;
-    CHECK(sluice_image_read(missing, &img, err, sizeof err) == SLUICE_ERROR_NOT_FOUND,
-          "missing file");
+    CHECK(sr_image_read(missing, &img, err, sizeof err) == SLUICE_ERROR_NOT_FOUND, "missing file");
     CHECK(img == NULL, "out not NULL after a failure");
     CHECK(strstr(err, missing) != NULL, "message does not name the path: %s", err);
 
     const char *garbage = in_dir("garbage.png");
     write_text(garbage, "this is text, not a PNG file\n");
     err[0] = 0;
-    CHECK(sluice_image_read(garbage, &img, err, sizeof err) == SLUICE_ERROR_IO, "garbage read");
+    CHECK(sr_image_read(garbage, &img, err, sizeof err) == SLUICE_ERROR_IO, "garbage read");
     CHECK(strstr(err, garbage) != NULL, "message does not name the path: %s", err);
     printf("garbage file: %s\n", err);
 
     err[0] = 0;
-    CHECK(sluice_image_read(dir, &img, err, sizeof err) == SLUICE_ERROR_IO, "directory read");
+    CHECK(sr_image_read(dir, &img, err, sizeof err) == SLUICE_ERROR_IO, "directory read");
     CHECK(strstr(err, dir) != NULL, "message does not name the path: %s", err);
-    CHECK(sluice_image_read(NULL, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL");
+    CHECK(sr_image_read(NULL, &img, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL");
 }
 
 static int near(double got, double want)
@@ -454,18 +448,18 @@ static int near(double got, double want)
 static void test_metrics(void)
 {
     char err[512];
-    sluice_image_metrics m;
+    sr_image_metrics m;
     /* Reference: 2x2, every channel 0.5. Image: R of pixel 0 is 0.6 (off by
      * 0.1), B of pixel 3 is 0.2 (off by 0.3). Over 12 values:
      *   sum of squares 0.01 + 0.09 = 0.1, rmse = sqrt(0.1 / 12) = 0.0912871
      *   rel_mse = (0.01 + 0.09) / (0.25 + 0.01) / 12 = 0.0320513
      *   psnr = 20 log10(1 / 0.0912871) = 20.7918 dB, max = 0.3 */
-    sluice_image *b = uniform(2, 2, 3, 0.5f), *a = uniform(2, 2, 4, 0.5f);
-    float *pa = sluice_image_pixels(a);
+    sr_image *b = uniform(2, 2, 3, 0.5f), *a = uniform(2, 2, 4, 0.5f);
+    float *pa = sr_image_pixels(a);
     pa[0] = 0.6f;
     pa[3 * 4 + 2] = 0.2f;
     pa[1 * 4 + 3] = 0.0f; /* alpha differs: not compared */
-    CHECK(sluice_image_compare(a, b, &m, err, sizeof err) == SLUICE_OK, "compare: %s", err);
+    CHECK(sr_image_compare(a, b, &m, err, sizeof err) == SLUICE_OK, "compare: %s", err);
     CHECK(near(m.rmse, 0.0912871), "rmse %.9g", m.rmse);
     CHECK(near(m.rel_mse, 0.0320513) || fabs(m.rel_mse - 0.0320513) < 1e-7, "rel_mse %.9g",
           m.rel_mse);
@@ -475,42 +469,41 @@ static void test_metrics(void)
           "counts %zu %u %zu %zu", m.pixels, m.channels, m.nan_count, m.inf_count);
 
     /* Identical: zero error, infinite PSNR. */
-    CHECK(sluice_image_compare(b, b, &m, err, sizeof err) == SLUICE_OK, "compare: %s", err);
+    CHECK(sr_image_compare(b, b, &m, err, sizeof err) == SLUICE_OK, "compare: %s", err);
     CHECK(m.rmse == 0 && m.rel_mse == 0 && m.max_error == 0 && isinf(m.psnr) && m.psnr > 0,
           "identical: rmse %g psnr %g", m.rmse, m.psnr);
 
     /* NaN and Inf pixels are counted once each and left out: pixel 1 has a
      * NaN in a, pixel 2 an Inf in b, pixel 3 a NaN in a and an Inf in b (a
      * NaN pixel). Only pixel 0 remains: one error of 0.1 in 3 values. */
-    sluice_image *c = uniform(2, 2, 3, 0.5f);
-    float *pc = sluice_image_pixels(c);
+    sr_image *c = uniform(2, 2, 3, 0.5f);
+    float *pc = sr_image_pixels(c);
     pa[1 * 4 + 1] = NAN;
     pa[3 * 4 + 0] = NAN;
     pc[2 * 3 + 2] = INFINITY;
     pc[3 * 3 + 1] = -INFINITY;
-    CHECK(sluice_image_compare(a, c, &m, err, sizeof err) == SLUICE_OK, "compare: %s", err);
+    CHECK(sr_image_compare(a, c, &m, err, sizeof err) == SLUICE_OK, "compare: %s", err);
     CHECK(m.nan_count == 2 && m.inf_count == 1, "nan %zu inf %zu", m.nan_count, m.inf_count);
     CHECK(near(m.rmse, sqrt(0.01 / 3.0)), "rmse with NaN pixels %.9g", m.rmse);
     CHECK(fabs(m.max_error - 0.1) < 1e-7, "max with NaN pixels %.9g", m.max_error);
     /* A NaN in alpha also makes the pixel invalid. */
     pa[1 * 4 + 1] = 0.5f;
     pa[1 * 4 + 3] = NAN;
-    CHECK(sluice_image_compare(a, c, &m, err, sizeof err) == SLUICE_OK, "compare: %s", err);
+    CHECK(sr_image_compare(a, c, &m, err, sizeof err) == SLUICE_OK, "compare: %s", err);
     CHECK(m.nan_count == 2 && m.inf_count == 1, "alpha NaN: nan %zu inf %zu", m.nan_count,
           m.inf_count);
 
     /* Different sizes. */
-    sluice_image *d = uniform(3, 2, 3, 0.5f);
+    sr_image *d = uniform(3, 2, 3, 0.5f);
     err[0] = 0;
-    CHECK(sluice_image_compare(a, d, &m, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
+    CHECK(sr_image_compare(a, d, &m, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "sizes differ");
     CHECK(strstr(err, "2x2") && strstr(err, "3x2"), "message: %s", err);
-    CHECK(sluice_image_compare(a, NULL, &m, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
-          "NULL");
-    sluice_image_destroy(a);
-    sluice_image_destroy(b);
-    sluice_image_destroy(c);
-    sluice_image_destroy(d);
+    CHECK(sr_image_compare(a, NULL, &m, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL");
+    sr_image_destroy(a);
+    sr_image_destroy(b);
+    sr_image_destroy(c);
+    sr_image_destroy(d);
 }
 
 /* ------------------------------------------------------------------ */
@@ -545,14 +538,14 @@ static int run_imgdiff(const char *a1, const char *a2, const char *a3, const cha
     return rc;
 }
 
-static void write_or_die(sluice_image *img, const char *path)
+static void write_or_die(sr_image *img, const char *path)
 {
     char err[512];
-    if (sluice_image_write(img, path, err, sizeof err) != SLUICE_OK) {
+    if (sr_image_write(img, path, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, "%s\n", err);
         exit(2);
     }
-    sluice_image_destroy(img);
+    sr_image_destroy(img);
 }
 
 static void test_imgdiff(void)
@@ -568,8 +561,8 @@ static void test_imgdiff(void)
     write_or_die(uniform(8, 4, 3, 0.5f), b);
     write_or_die(uniform(8, 4, 3, 0.6f), c); /* rmse 0.1, psnr 20 dB */
     write_or_die(uniform(4, 4, 3, 0.5f), s);
-    sluice_image *img = uniform(8, 4, 3, 0.5f);
-    sluice_image_pixels(img)[5] = NAN;
+    sr_image *img = uniform(8, 4, 3, 0.5f);
+    sr_image_pixels(img)[5] = NAN;
     write_or_die(img, n);
 
     int rc = run_imgdiff(a, b, NULL, NULL, NULL, NULL);

@@ -32,11 +32,11 @@ static sluice_context *ctx;
 /* ------------------------------------------------------------------ */
 
 /* Nearest hit over every triangle, with the kernels' arithmetic (mt_ref.h). */
-RT_MT_REF_FAST static void bf_trace(const sluice_scene *s, const rt_ray *r, rt_hit *h)
+RT_MT_REF_FAST static void bf_trace(const sr_scene *s, const rt_ray *r, rt_hit *h)
 {
-    const float *p = sluice_scene_positions(s);
-    const uint32_t *ix = sluice_scene_indices(s);
-    size_t nt = sluice_scene_triangle_count(s);
+    const float *p = sr_scene_positions(s);
+    const uint32_t *ix = sr_scene_indices(s);
+    size_t nt = sr_scene_triangle_count(s);
     const float o[3] = {r->ox, r->oy, r->oz}, d[3] = {r->dx, r->dy, r->dz};
     h->tri = RT_NO_HIT;
     h->t = r->tmax;
@@ -88,13 +88,13 @@ static void random_dir(uint32_t *st, float d[3])
 /* Random rays: origins in the scene's box grown by 20% each way (so some
  * start outside the grid), directions uniform; every 8th ray aims at a
  * random triangle's centroid so that most rays hit. */
-static rt_ray *random_rays(const sluice_scene *s, size_t n, uint32_t seed)
+static rt_ray *random_rays(const sr_scene *s, size_t n, uint32_t seed)
 {
     rt_ray *r = malloc(n * sizeof *r);
-    const sluice_scene_stats *ss = sluice_scene_statistics(s);
-    const float *p = sluice_scene_positions(s);
-    const uint32_t *ix = sluice_scene_indices(s);
-    size_t nt = sluice_scene_triangle_count(s);
+    const sr_scene_stats *ss = sr_scene_statistics(s);
+    const float *p = sr_scene_positions(s);
+    const uint32_t *ix = sr_scene_indices(s);
+    size_t nt = sr_scene_triangle_count(s);
     uint32_t st = seed;
     for (size_t i = 0; i < n; ++i) {
         float o[3], d[3];
@@ -148,20 +148,20 @@ static void compare_hits(const rt_hit *a, const rt_hit *b, size_t n, cmp_result 
     }
 }
 
-static sluice_scene *load(const char *name)
+static sr_scene *load(const char *name)
 {
     char err[512];
-    sluice_scene_load_options o = {0};
-    o.flags = SLUICE_SCENE_ALLOW_NO_LIGHT;
-    sluice_scene *s = NULL;
-    if (sluice_scene_load(name, &o, &s, err, sizeof err) != SLUICE_OK) {
+    sr_scene_load_options o = {0};
+    o.flags = SR_SCENE_ALLOW_NO_LIGHT;
+    sr_scene *s = NULL;
+    if (sr_scene_load(name, &o, &s, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, "scene %s: %s\n", name, err);
         return NULL;
     }
     return s;
 }
 
-static rt_tracer *make_tracer_walk(const sluice_scene *s, rt_exec exec, rt_intersector isect,
+static rt_tracer *make_tracer_walk(const sr_scene *s, rt_exec exec, rt_intersector isect,
                                    unsigned mode, rt_fused_walk walk, size_t list_copy_max)
 {
     char err[1024];
@@ -177,8 +177,7 @@ static rt_tracer *make_tracer_walk(const sluice_scene *s, rt_exec exec, rt_inter
     return t;
 }
 
-static rt_tracer *make_tracer(const sluice_scene *s, rt_exec exec, rt_intersector isect,
-                              unsigned mode)
+static rt_tracer *make_tracer(const sr_scene *s, rt_exec exec, rt_intersector isect, unsigned mode)
 {
     return make_tracer_walk(s, exec, isect, mode, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT);
 }
@@ -187,7 +186,7 @@ static size_t total_rays_checked;
 
 /* Traces `rays` in both modes and compares with the brute force on the first
  * `nbf` of them (all when nbf == n). */
-static void check_against_bf(const char *name, const sluice_scene *s, rt_ray *rays, size_t n,
+static void check_against_bf(const char *name, const sr_scene *s, rt_ray *rays, size_t n,
                              size_t nbf)
 {
     rt_hit *ref = malloc(nbf * sizeof *ref), *got = malloc(n * sizeof *got);
@@ -260,7 +259,7 @@ static void test_random_rays(void)
                  {"bunny", 200000, 10000},
                  {"cornell-point", 200000, 200000}};
     for (size_t c = 0; c < sizeof cases / sizeof *cases; ++c) {
-        sluice_scene *s = load(cases[c].name);
+        sr_scene *s = load(cases[c].name);
         if (!s) {
             if (strcmp(cases[c].name, "bunny") == 0) {
                 printf("bunny not installed: skipped\n");
@@ -272,7 +271,7 @@ static void test_random_rays(void)
         rt_ray *r = random_rays(s, cases[c].n, 1234u + (uint32_t)c);
         check_against_bf(cases[c].name, s, r, cases[c].n, cases[c].nbf);
         free(r);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
 }
 
@@ -280,43 +279,42 @@ static void test_random_rays(void)
 /* Small scenes built here                                             */
 /* ------------------------------------------------------------------ */
 
-static sluice_scene *one_triangle(void)
+static sr_scene *one_triangle(void)
 {
-    sluice_scene_builder *b = NULL;
-    sluice_scene_builder_create("one triangle", &b);
+    sr_scene_builder *b = NULL;
+    sr_scene_builder_create("one triangle", &b);
     char err[256];
-    sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, "d");
+    sr_material m = sr_material_make(SR_MATERIAL_DIFFUSE, "d");
     uint32_t mi;
-    sluice_scene_builder_add_material(b, &m, &mi, err, sizeof err);
+    sr_scene_builder_add_material(b, &m, &mi, err, sizeof err);
     float pos[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5, 5, 5, 5, 6, 6, 6};
     uint32_t idx[] = {0, 1, 2, 3, 4, 5}; /* the second one is degenerate: dropped */
-    sluice_mesh_desc md = {0};
+    sr_mesh_desc md = {0};
     md.source = "tri";
     md.positions = pos;
     md.vertex_count = 6;
     md.indices = idx;
     md.triangle_count = 2;
     md.material = mi;
-    CHECK(sluice_scene_builder_add_mesh(b, &md, err, sizeof err) == SLUICE_OK, "%s", err);
-    sluice_scene *s = NULL;
-    CHECK(sluice_scene_builder_finish(b, SLUICE_SCENE_DEFAULT_LIGHT, &s, err, sizeof err) ==
-              SLUICE_OK,
+    CHECK(sr_scene_builder_add_mesh(b, &md, err, sizeof err) == SLUICE_OK, "%s", err);
+    sr_scene *s = NULL;
+    CHECK(sr_scene_builder_finish(b, SR_SCENE_DEFAULT_LIGHT, &s, err, sizeof err) == SLUICE_OK,
           "%s", err);
-    sluice_scene_builder_destroy(b);
+    sr_scene_builder_destroy(b);
     return s;
 }
 
 static void test_one_triangle_and_edges(void)
 {
-    sluice_scene *s = one_triangle();
+    sr_scene *s = one_triangle();
     if (!s)
         return;
-    CHECK(sluice_scene_triangle_count(s) == 1, "degenerate triangle kept");
-    CHECK(sluice_scene_statistics(s)->degenerate_dropped == 1, "degenerate not counted");
+    CHECK(sr_scene_triangle_count(s) == 1, "degenerate triangle kept");
+    CHECK(sr_scene_statistics(s)->degenerate_dropped == 1, "degenerate not counted");
     rt_ray *r = random_rays(s, 100000, 99);
     check_against_bf("one-triangle", s, r, 100000, 100000);
     free(r);
-    sluice_scene_destroy(s);
+    sr_scene_destroy(s);
 
     /* Axis-parallel rays and rays starting exactly on voxel faces and grid
      * corners, in cornell. */
@@ -325,7 +323,7 @@ static void test_one_triangle_and_edges(void)
         return;
     rt_tracer *t = make_tracer(s, RT_EXEC_FUSED, RT_ISECT_MT, RT_MODE_CAST);
     if (!t) {
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
         return;
     }
     const rt_grid_desc *g = &rt_tracer_grid(t)->desc;
@@ -354,7 +352,7 @@ static void test_one_triangle_and_edges(void)
     rt_tracer_destroy(t);
     check_against_bf("cornell-axis-and-corners", s, rays, n, n);
     free(rays);
-    sluice_scene_destroy(s);
+    sr_scene_destroy(s);
 }
 
 /* ------------------------------------------------------------------ */
@@ -369,10 +367,10 @@ static int cmp_u64(const void *x, const void *y)
 
 /* The three undirected edges of every triangle (a << 32 | b with a < b),
  * sorted, so that an edge's triangles are neighbours; 3 per triangle. */
-static uint64_t *sorted_edges(const sluice_scene *s)
+static uint64_t *sorted_edges(const sr_scene *s)
 {
-    size_t nt = sluice_scene_triangle_count(s);
-    const uint32_t *ix = sluice_scene_indices(s);
+    size_t nt = sr_scene_triangle_count(s);
+    const uint32_t *ix = sr_scene_indices(s);
     uint64_t *e = malloc(3 * nt * sizeof *e);
     for (size_t i = 0; i < nt; ++i)
         for (int k = 0; k < 3; ++k) {
@@ -384,9 +382,9 @@ static uint64_t *sorted_edges(const sluice_scene *s)
 }
 
 /* Non-zero when every undirected edge is shared by exactly two triangles. */
-static int is_closed(const sluice_scene *s)
+static int is_closed(const sr_scene *s)
 {
-    size_t nt = sluice_scene_triangle_count(s);
+    size_t nt = sr_scene_triangle_count(s);
     uint64_t *e = sorted_edges(s);
     int closed = 1;
     for (size_t i = 0; i < 3 * nt;) {
@@ -407,9 +405,9 @@ static const char *const lk_names[LK_CATEGORIES] = {"random directions", "at ver
                                                     "at edge points +-1 ulp"};
 
 /* The mesh's distinct undirected edges (a << 32 | b with a < b), sorted. */
-static uint64_t *unique_edges(const sluice_scene *s, size_t *count)
+static uint64_t *unique_edges(const sr_scene *s, size_t *count)
 {
-    size_t nt = sluice_scene_triangle_count(s);
+    size_t nt = sr_scene_triangle_count(s);
     uint64_t *e = sorted_edges(s);
     size_t m = 0;
     for (size_t i = 0; i < 3 * nt; ++i)
@@ -451,7 +449,7 @@ static void aim(rt_ray *rays, unsigned char *cat, size_t *n, uint32_t *st, const
  * vertices and at points v0 + s (v1 - v0) of its shared edges, and at
  * those points moved by one ulp, from c and from a few other interior
  * points (every `edge_stride`-th edge only, for large meshes). */
-static void leak_test(const char *name, const sluice_scene *s, const float c[3], float radius,
+static void leak_test(const char *name, const sr_scene *s, const float c[3], float radius,
                       size_t n_random, size_t edge_stride)
 {
     static const float edge_s[] = {0.5f, 0.25f, 1.0f / 3.0f, 0.9f};
@@ -460,9 +458,9 @@ static void leak_test(const char *name, const sluice_scene *s, const float c[3],
     static const float offs[][3] = {
         {0, 0, 0}, {0.5f, 0, 0}, {0, -0.5f, 0}, {0, 0, 0.5f}, {-0.3f, 0.3f, -0.3f}};
     enum { NO = sizeof offs / sizeof offs[0] };
-    const float *pos = sluice_scene_positions(s);
-    const uint32_t *ix = sluice_scene_indices(s);
-    size_t nt = sluice_scene_triangle_count(s), nv = sluice_scene_vertex_count(s);
+    const float *pos = sr_scene_positions(s);
+    const uint32_t *ix = sr_scene_indices(s);
+    size_t nt = sr_scene_triangle_count(s), nv = sr_scene_vertex_count(s);
     size_t ne;
     uint64_t *edges = unique_edges(s, &ne);
     unsigned char *used = calloc(nv, 1);
@@ -543,22 +541,22 @@ static void leak_test(const char *name, const sluice_scene *s, const float c[3],
 
 static void test_watertight(void)
 {
-    sluice_scene_builder *b = NULL;
-    sluice_scene_builder_create("sphere", &b);
+    sr_scene_builder *b = NULL;
+    sr_scene_builder_create("sphere", &b);
     char err[256];
-    sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, "d");
+    sr_material m = sr_material_make(SR_MATERIAL_DIFFUSE, "d");
     uint32_t mi;
-    sluice_scene_builder_add_material(b, &m, &mi, err, sizeof err);
+    sr_scene_builder_add_material(b, &m, &mi, err, sizeof err);
     float c[3] = {0.3f, -0.2f, 0.1f};
-    CHECK(sluice_scene_builder_add_sphere(b, c, 1.0f, 24, mi, NULL, err, sizeof err) == SLUICE_OK,
-          "%s", err);
-    sluice_scene *s = NULL;
-    sluice_scene_builder_finish(b, SLUICE_SCENE_DEFAULT_LIGHT, &s, err, sizeof err);
-    sluice_scene_builder_destroy(b);
+    CHECK(sr_scene_builder_add_sphere(b, c, 1.0f, 24, mi, NULL, err, sizeof err) == SLUICE_OK, "%s",
+          err);
+    sr_scene *s = NULL;
+    sr_scene_builder_finish(b, SR_SCENE_DEFAULT_LIGHT, &s, err, sizeof err);
+    sr_scene_builder_destroy(b);
     if (s) {
         CHECK(is_closed(s), "the tessellated sphere is not closed");
         leak_test("sphere (11520 triangles)", s, c, 0.8f, 1000000, 1);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
     s = load("bunny");
     if (s) {
@@ -567,7 +565,7 @@ static void test_watertight(void)
         else
             printf("bunny: not a closed mesh (edges with other than two triangles): no leak "
                    "test\n");
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
 }
 
@@ -579,13 +577,13 @@ static const char *const mode_names[] = {"cast", "shadow", "whitted", "path"};
 
 /* Renders `spp` samples; returns the image (NULL on failure) and the
  * non-finite counts. */
-static sluice_image *render(const sluice_scene *s, rt_exec exec, unsigned mode, unsigned w,
-                            unsigned h, unsigned spp, uint32_t seed)
+static sr_image *render(const sr_scene *s, rt_exec exec, unsigned mode, unsigned w, unsigned h,
+                        unsigned spp, uint32_t seed)
 {
     rt_tracer *t = make_tracer(s, exec, RT_ISECT_MT, mode);
     if (!t)
         return NULL;
-    const sluice_render_settings *rs = sluice_scene_render_settings(s);
+    const sr_render_settings *rs = sr_scene_render_settings(s);
     rt_render_options o = {0};
     o.mode = mode;
     o.width = w;
@@ -595,9 +593,9 @@ static sluice_image *render(const sluice_scene *s, rt_exec exec, unsigned mode, 
     o.seed = seed;
     rt_renderer *r = NULL;
     char err[512];
-    sluice_image *img = NULL;
+    sr_image *img = NULL;
     CHECK(rt_renderer_create(t, &o, &r, err, sizeof err) == SLUICE_OK, "%s", err);
-    sluice_image_create(w, h, 3, &img, err, sizeof err);
+    sr_image_create(w, h, 3, &img, err, sizeof err);
     for (unsigned i = 0; r && i < spp; ++i)
         CHECK_OK(ctx, rt_renderer_sample(r));
     size_t bad = 1;
@@ -617,7 +615,7 @@ static sluice_image *render(const sluice_scene *s, rt_exec exec, unsigned mode, 
  * noisier where a few paths change, rmse <= 1e-2. */
 static void test_reference_images(const char *write_dir)
 {
-    sluice_scene *s = load("cornell");
+    sr_scene *s = load("cornell");
     if (!s)
         return;
     for (unsigned mode = 0; mode < 4; ++mode) {
@@ -626,63 +624,62 @@ static void test_reference_images(const char *write_dir)
         snprintf(path, sizeof path, "%s/cornell_%s_64.exr", write_dir ? write_dir : RT_TEST_DATA,
                  mode_names[mode]);
         if (write_dir) {
-            sluice_image *img = render(s, RT_EXEC_FUSED, mode, 64, 64, spp, 1);
+            sr_image *img = render(s, RT_EXEC_FUSED, mode, 64, 64, spp, 1);
             char err[512];
-            CHECK(img && sluice_image_write(img, path, err, sizeof err) == SLUICE_OK, "%s", err);
+            CHECK(img && sr_image_write(img, path, err, sizeof err) == SLUICE_OK, "%s", err);
             printf("wrote %s\n", path);
-            sluice_image_destroy(img);
+            sr_image_destroy(img);
             continue;
         }
-        sluice_image *ref = NULL;
+        sr_image *ref = NULL;
         char err[512];
-        if (sluice_image_read(path, &ref, err, sizeof err) != SLUICE_OK) {
+        if (sr_image_read(path, &ref, err, sizeof err) != SLUICE_OK) {
             CHECK(0, "reference %s: %s", path, err);
             continue;
         }
         for (int e = 0; e < 2; ++e) {
-            sluice_image *img = render(s, e ? RT_EXEC_FUSED : RT_EXEC_STREAM, mode, 64, 64, spp, 1);
+            sr_image *img = render(s, e ? RT_EXEC_FUSED : RT_EXEC_STREAM, mode, 64, 64, spp, 1);
             if (!img)
                 continue;
-            sluice_image_metrics m;
-            CHECK(sluice_image_compare(img, ref, &m, err, sizeof err) == SLUICE_OK, "%s", err);
+            sr_image_metrics m;
+            CHECK(sr_image_compare(img, ref, &m, err, sizeof err) == SLUICE_OK, "%s", err);
             double limit = mode == RT_MODE_PATH ? 1e-2 : 1e-3;
             printf("cornell %-8s %-6s vs reference: rmse %.3g, max %.3g\n", mode_names[mode],
                    e ? "fused" : "stream", m.rmse, m.max_error);
             CHECK(m.rmse <= limit && m.nan_count == 0 && m.inf_count == 0, "%s %s: rmse %g > %g",
                   mode_names[mode], e ? "fused" : "stream", m.rmse, limit);
-            sluice_image_destroy(img);
+            sr_image_destroy(img);
         }
-        sluice_image_destroy(ref);
+        sr_image_destroy(ref);
     }
-    sluice_scene_destroy(s);
+    sr_scene_destroy(s);
 }
 
-static int images_identical(const sluice_image *a, const sluice_image *b)
+static int images_identical(const sr_image *a, const sr_image *b)
 {
-    size_t n = (size_t)sluice_image_width(a) * sluice_image_height(a) * 3;
-    return memcmp(sluice_image_pixels_const(a), sluice_image_pixels_const(b), n * sizeof(float)) ==
-           0;
+    size_t n = (size_t)sr_image_width(a) * sr_image_height(a) * 3;
+    return memcmp(sr_image_pixels_const(a), sr_image_pixels_const(b), n * sizeof(float)) == 0;
 }
 
 static void test_determinism(void)
 {
-    sluice_scene *s = load("cornell");
+    sr_scene *s = load("cornell");
     if (!s)
         return;
-    sluice_image *a = render(s, RT_EXEC_FUSED, RT_MODE_PATH, 48, 48, 3, 77);
-    sluice_image *b = render(s, RT_EXEC_FUSED, RT_MODE_PATH, 48, 48, 3, 77);
-    sluice_image *c = render(s, RT_EXEC_STREAM, RT_MODE_PATH, 48, 48, 3, 77);
-    sluice_image *d = render(s, RT_EXEC_FUSED, RT_MODE_PATH, 48, 48, 3, 78);
+    sr_image *a = render(s, RT_EXEC_FUSED, RT_MODE_PATH, 48, 48, 3, 77);
+    sr_image *b = render(s, RT_EXEC_FUSED, RT_MODE_PATH, 48, 48, 3, 77);
+    sr_image *c = render(s, RT_EXEC_STREAM, RT_MODE_PATH, 48, 48, 3, 77);
+    sr_image *d = render(s, RT_EXEC_FUSED, RT_MODE_PATH, 48, 48, 3, 78);
     if (a && b && c && d) {
         CHECK(images_identical(a, b), "same seed, different images");
         CHECK(images_identical(a, c), "stream and fused path images differ");
         CHECK(!images_identical(a, d), "different seeds, same image");
     }
-    sluice_image_destroy(a);
-    sluice_image_destroy(b);
-    sluice_image_destroy(c);
-    sluice_image_destroy(d);
-    sluice_scene_destroy(s);
+    sr_image_destroy(a);
+    sr_image_destroy(b);
+    sr_image_destroy(c);
+    sr_image_destroy(d);
+    sr_scene_destroy(s);
 
     /* whitted and path on scenes with mirrors and glass: no NaN/Inf */
     const char *scenes[] = {"glassball", "teapotahedron", "ring"};
@@ -690,9 +687,9 @@ static void test_determinism(void)
         s = load(scenes[i]);
         if (!s)
             continue;
-        sluice_image_destroy(render(s, RT_EXEC_FUSED, RT_MODE_WHITTED, 40, 40, 1, 1));
-        sluice_image_destroy(render(s, RT_EXEC_STREAM, RT_MODE_PATH, 32, 32, 2, 1));
-        sluice_scene_destroy(s);
+        sr_image_destroy(render(s, RT_EXEC_FUSED, RT_MODE_WHITTED, 40, 40, 1, 1));
+        sr_image_destroy(render(s, RT_EXEC_STREAM, RT_MODE_PATH, 32, 32, 2, 1));
+        sr_scene_destroy(s);
     }
 }
 
@@ -700,89 +697,88 @@ static void test_determinism(void)
  * of coordinates is ~0.008 there, against ~3e-5 near the origin). */
 static void test_translated(void)
 {
-    sluice_scene *s = load("cornell");
+    sr_scene *s = load("cornell");
     if (!s)
         return;
     const float off = 1e5f;
-    sluice_scene_builder *b = NULL;
-    sluice_scene_builder_create("cornell+1e5", &b);
+    sr_scene_builder *b = NULL;
+    sr_scene_builder_create("cornell+1e5", &b);
     char err[256];
-    size_t nm = sluice_scene_material_count(s);
+    size_t nm = sr_scene_material_count(s);
     for (size_t i = 0; i < nm; ++i)
-        sluice_scene_builder_add_material(b, &sluice_scene_materials(s)[i], NULL, err, sizeof err);
+        sr_scene_builder_add_material(b, &sr_scene_materials(s)[i], NULL, err, sizeof err);
     float m[16] = {1, 0, 0, off, 0, 1, 0, off, 0, 0, 1, off, 0, 0, 0, 1};
-    sluice_mesh_desc md = {0};
-    md.positions = sluice_scene_positions(s);
-    md.vertex_count = sluice_scene_vertex_count(s);
-    md.indices = sluice_scene_indices(s);
-    md.triangle_count = sluice_scene_triangle_count(s);
-    md.materials = sluice_scene_triangle_materials(s);
+    sr_mesh_desc md = {0};
+    md.positions = sr_scene_positions(s);
+    md.vertex_count = sr_scene_vertex_count(s);
+    md.indices = sr_scene_indices(s);
+    md.triangle_count = sr_scene_triangle_count(s);
+    md.materials = sr_scene_triangle_materials(s);
     md.transform = m;
-    CHECK(sluice_scene_builder_add_mesh(b, &md, err, sizeof err) == SLUICE_OK, "%s", err);
-    sluice_camera cam = *sluice_scene_camera(s);
+    CHECK(sr_scene_builder_add_mesh(b, &md, err, sizeof err) == SLUICE_OK, "%s", err);
+    sr_camera cam = *sr_scene_camera(s);
     for (int k = 0; k < 3; ++k) {
         cam.eye[k] += off;
         cam.look_at[k] += off;
     }
-    sluice_scene_builder_set_camera(b, &cam, err, sizeof err);
-    sluice_scene *moved = NULL;
-    CHECK(sluice_scene_builder_finish(b, SLUICE_SCENE_DEFAULT_LIGHT, &moved, err, sizeof err) ==
-              SLUICE_OK,
+    sr_scene_builder_set_camera(b, &cam, err, sizeof err);
+    sr_scene *moved = NULL;
+    CHECK(sr_scene_builder_finish(b, SR_SCENE_DEFAULT_LIGHT, &moved, err, sizeof err) == SLUICE_OK,
           "%s", err);
-    sluice_scene_builder_destroy(b);
+    sr_scene_builder_destroy(b);
     if (moved) {
-        sluice_image *a = render(s, RT_EXEC_FUSED, RT_MODE_CAST, 64, 64, 1, 1);
-        sluice_image *c = render(moved, RT_EXEC_STREAM, RT_MODE_CAST, 64, 64, 1, 1);
-        sluice_image_metrics mm;
-        if (a && c && sluice_image_compare(c, a, &mm, err, sizeof err) == SLUICE_OK) {
+        sr_image *a = render(s, RT_EXEC_FUSED, RT_MODE_CAST, 64, 64, 1, 1);
+        sr_image *c = render(moved, RT_EXEC_STREAM, RT_MODE_CAST, 64, 64, 1, 1);
+        sr_image_metrics mm;
+        if (a && c && sr_image_compare(c, a, &mm, err, sizeof err) == SLUICE_OK) {
             printf("cornell moved by 1e5, cast 64x64: rmse %.3g, max %.3g\n", mm.rmse,
                    mm.max_error);
             CHECK(mm.rmse <= 0.02, "translated scene: rmse %g", mm.rmse);
         }
-        sluice_image_destroy(a);
-        sluice_image_destroy(c);
-        sluice_scene_destroy(moved);
+        sr_image_destroy(a);
+        sr_image_destroy(c);
+        sr_scene_destroy(moved);
     }
-    sluice_scene_destroy(s);
+    sr_scene_destroy(s);
 }
 
 /* A camera inside the grid (in the middle of the cornell box). */
 static void test_camera_inside(void)
 {
-    sluice_scene *s = load("cornell");
+    sr_scene *s = load("cornell");
     if (!s)
         return;
-    sluice_scene_builder *b = NULL;
-    sluice_scene_builder_create("cornell-inside", &b);
+    sr_scene_builder *b = NULL;
+    sr_scene_builder_create("cornell-inside", &b);
     char err[256];
-    for (size_t i = 0; i < sluice_scene_material_count(s); ++i)
-        sluice_scene_builder_add_material(b, &sluice_scene_materials(s)[i], NULL, err, sizeof err);
-    sluice_mesh_desc md = {0};
-    md.positions = sluice_scene_positions(s);
-    md.vertex_count = sluice_scene_vertex_count(s);
-    md.indices = sluice_scene_indices(s);
-    md.triangle_count = sluice_scene_triangle_count(s);
-    md.materials = sluice_scene_triangle_materials(s);
-    sluice_scene_builder_add_mesh(b, &md, err, sizeof err);
-    sluice_camera cam = *sluice_scene_camera(s);
+    for (size_t i = 0; i < sr_scene_material_count(s); ++i)
+        sr_scene_builder_add_material(b, &sr_scene_materials(s)[i], NULL, err, sizeof err);
+    sr_mesh_desc md = {0};
+    md.positions = sr_scene_positions(s);
+    md.vertex_count = sr_scene_vertex_count(s);
+    md.indices = sr_scene_indices(s);
+    md.triangle_count = sr_scene_triangle_count(s);
+    md.materials = sr_scene_triangle_materials(s);
+    sr_scene_builder_add_mesh(b, &md, err, sizeof err);
+    sr_camera cam = *sr_scene_camera(s);
     float eye[3] = {278, 400, 300}, at[3] = {100, 0, 500};
     memcpy(cam.eye, eye, sizeof eye);
     memcpy(cam.look_at, at, sizeof at);
-    sluice_scene_builder_set_camera(b, &cam, err, sizeof err);
-    sluice_scene *in = NULL;
-    sluice_scene_builder_finish(b, 0, &in, err, sizeof err);
-    sluice_scene_builder_destroy(b);
+    sr_scene_builder_set_camera(b, &cam, err, sizeof err);
+    sr_scene *in = NULL;
+    sr_scene_builder_finish(b, 0, &in, err, sizeof err);
+    sr_scene_builder_destroy(b);
     if (in) {
-        sluice_image *img = render(in, RT_EXEC_STREAM, RT_MODE_CAST, 32, 32, 1, 1);
+        sr_image *img = render(in, RT_EXEC_STREAM, RT_MODE_CAST, 32, 32, 1, 1);
         size_t lit = 0;
         if (img)
             for (size_t i = 0; i < 32 * 32 * 3; ++i)
-                lit += sluice_image_pixels(img)[i] > 0;
+                lit += sr_image_pixels(img)[i] > 0;
         CHECK(lit == 32 * 32 * 3, "camera inside the box: %zu of %d values lit", lit, 32 * 32 * 3);
-        sluice_image_destroy(img);
-        sluice_scene_destroy(in);
+        sr_image_destroy(img);
+        sr_scene_destroy(in);
     }
-    sluice_scene_destroy(s);
+    sr_scene_destroy(s);
 }
 
 /* ------------------------------------------------------------------ */
@@ -854,11 +850,11 @@ static void test_cli(const char *exe)
         fclose(f);
         CHECK(strstr(out, "\"v\"") && strstr(out, "\"kernels\""), "stats JSON: %s", out);
     }
-    sluice_image *img = NULL;
+    sr_image *img = NULL;
     char err[256];
-    CHECK(sluice_image_read("cli_ok.exr", &img, err, sizeof err) == SLUICE_OK, "%s", err);
-    CHECK(img && sluice_image_width(img) == 32 && sluice_image_height(img) == 24, "image size");
-    sluice_image_destroy(img);
+    CHECK(sr_image_read("cli_ok.exr", &img, err, sizeof err) == SLUICE_OK, "%s", err);
+    CHECK(img && sr_image_width(img) == 32 && sr_image_height(img) == 24, "image size");
+    sr_image_destroy(img);
 
     /* Ctrl-C: finish the sample, write the image, exit 130 */
     remove("cli_int.exr");
@@ -868,9 +864,9 @@ static void test_cli(const char *exe)
              exe);
     int rc = run(cmd, out, sizeof out);
     CHECK(rc == 130, "SIGINT: exit %d: %s", rc, out);
-    CHECK(sluice_image_read("cli_int.exr", &img, err, sizeof err) == SLUICE_OK,
+    CHECK(sr_image_read("cli_int.exr", &img, err, sizeof err) == SLUICE_OK,
           "no image after SIGINT: %s", err);
-    sluice_image_destroy(img);
+    sr_image_destroy(img);
 }
 
 int main(int argc, char **argv)

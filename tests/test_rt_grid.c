@@ -639,16 +639,16 @@ static void test_many(sluice_context *ctx)
 static void test_scene(sluice_context *ctx, const char *name, int compare_host)
 {
     char err[512];
-    sluice_scene_load_options o = {0};
-    o.flags = SLUICE_SCENE_ALLOW_NO_LIGHT;
-    sluice_scene *sc = NULL;
+    sr_scene_load_options o = {0};
+    o.flags = SR_SCENE_ALLOW_NO_LIGHT;
+    sr_scene *sc = NULL;
     double t0 = now();
-    sluice_status st = sluice_scene_load(name, &o, &sc, err, sizeof err);
+    sluice_status st = sr_scene_load(name, &o, &sc, err, sizeof err);
     double t_load = now() - t0;
     CHECK(st == SLUICE_OK, "loading %s: %s", name, err);
     if (st != SLUICE_OK)
         return;
-    const sluice_scene_stats *stats = sluice_scene_statistics(sc);
+    const sr_scene_stats *stats = sr_scene_statistics(sc);
     rt_grid_desc d, d64;
     CHECK(rt_grid_choose(stats->bounds_min, stats->bounds_max, RT_GRID_DEFAULT_MIN_DIM, &d, err,
                          sizeof err) == SLUICE_OK,
@@ -656,9 +656,9 @@ static void test_scene(sluice_context *ctx, const char *name, int compare_host)
     CHECK(rt_grid_choose(stats->bounds_min, stats->bounds_max, 64, &d64, err, sizeof err) ==
               SLUICE_OK,
           "%s: %s", name, err);
-    size_t nt = sluice_scene_triangle_count(sc), nv = sluice_scene_vertex_count(sc);
-    const float *pos = sluice_scene_positions(sc);
-    const uint32_t *idx = sluice_scene_indices(sc);
+    size_t nt = sr_scene_triangle_count(sc), nv = sr_scene_vertex_count(sc);
+    const float *pos = sr_scene_positions(sc);
+    const uint32_t *idx = sr_scene_indices(sc);
     rt_grid_host h = {0};
     double t_host = 0, t_dev = 0;
     size_t bytes = 0, entries = 0;
@@ -719,50 +719,49 @@ static void test_scene(sluice_context *ctx, const char *name, int compare_host)
         CHECK(total < 200u * 1000 * 1000, "million: grid + triangles %zu bytes", total);
     }
     rt_grid_host_free(&h);
-    sluice_scene_destroy(sc);
+    sr_scene_destroy(sc);
 }
 
 /* A scene of one triangle, built with the scene builder. */
 static void test_one_triangle(sluice_context *ctx)
 {
     char err[256];
-    sluice_scene_builder *b = NULL;
-    sluice_scene *sc = NULL;
-    sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, "grey");
+    sr_scene_builder *b = NULL;
+    sr_scene *sc = NULL;
+    sr_material m = sr_material_make(SR_MATERIAL_DIFFUSE, "grey");
     float pos[9] = {0.25f, -1, 3, 2, 0.5f, 3.5f, -1, 1, 2};
     uint32_t idx[3] = {0, 1, 2};
-    sluice_mesh_desc mesh = {0};
+    sr_mesh_desc mesh = {0};
     mesh.source = "one";
     mesh.positions = pos;
     mesh.vertex_count = 3;
     mesh.indices = idx;
     mesh.triangle_count = 1;
-    CHECK(sluice_scene_builder_create("one triangle", &b) == SLUICE_OK, "builder");
-    CHECK(sluice_scene_builder_add_material(b, &m, NULL, err, sizeof err) == SLUICE_OK, "%s", err);
-    CHECK(sluice_scene_builder_add_mesh(b, &mesh, err, sizeof err) == SLUICE_OK, "%s", err);
-    CHECK(sluice_scene_builder_finish(b, SLUICE_SCENE_ALLOW_NO_LIGHT, &sc, err, sizeof err) ==
-              SLUICE_OK,
+    CHECK(sr_scene_builder_create("one triangle", &b) == SLUICE_OK, "builder");
+    CHECK(sr_scene_builder_add_material(b, &m, NULL, err, sizeof err) == SLUICE_OK, "%s", err);
+    CHECK(sr_scene_builder_add_mesh(b, &mesh, err, sizeof err) == SLUICE_OK, "%s", err);
+    CHECK(sr_scene_builder_finish(b, SR_SCENE_ALLOW_NO_LIGHT, &sc, err, sizeof err) == SLUICE_OK,
           "%s", err);
-    sluice_scene_builder_destroy(b);
+    sr_scene_builder_destroy(b);
     if (!sc)
         return;
-    const sluice_scene_stats *st = sluice_scene_statistics(sc);
+    const sr_scene_stats *st = sr_scene_statistics(sc);
     rt_grid_desc d;
     CHECK(rt_grid_choose(st->bounds_min, st->bounds_max, RT_GRID_DEFAULT_MIN_DIM, &d, err,
                          sizeof err) == SLUICE_OK,
           "%s", err);
     rt_grid_host h;
-    CHECK(rt_grid_build_host(&d, sluice_scene_positions(sc), sluice_scene_indices(sc), 1, &h, err,
+    CHECK(rt_grid_build_host(&d, sr_scene_positions(sc), sr_scene_indices(sc), 1, &h, err,
                              sizeof err) == SLUICE_OK,
           "%s", err);
-    soup s = {(float *)sluice_scene_positions(sc), (uint32_t *)sluice_scene_indices(sc), 3, 1};
+    soup s = {(float *)sr_scene_positions(sc), (uint32_t *)sr_scene_indices(sc), 3, 1};
     check_samples(&h, &s, "one triangle");
-    device_vs_host(ctx, &d, sluice_scene_positions(sc), 3, sluice_scene_indices(sc), 1, &h,
-                   "one triangle", NULL, NULL);
+    device_vs_host(ctx, &d, sr_scene_positions(sc), 3, sr_scene_indices(sc), 1, &h, "one triangle",
+                   NULL, NULL);
     printf("one triangle: grid %ux%ux%u, %u entries\n", d.dims[0], d.dims[1], d.dims[2],
            h.cell_start[(size_t)d.dims[0] * d.dims[1] * d.dims[2]]);
     rt_grid_host_free(&h);
-    sluice_scene_destroy(sc);
+    sr_scene_destroy(sc);
 }
 
 /* rt_grid_auto_min_dim: about RT_GRID_AUTO_DENSITY voxels per triangle. */

@@ -45,13 +45,13 @@ static int file_exists(const char *path)
 
 /* Loads and returns the status; the scene (or NULL) in *out, the message in
  * err. */
-static sluice_status load(const char *name, unsigned flags, sluice_scene **out, char *err,
+static sluice_status load(const char *name, unsigned flags, sr_scene **out, char *err,
                           size_t err_size)
 {
-    sluice_scene_load_options o = {0};
+    sr_scene_load_options o = {0};
     o.flags = flags;
     err[0] = '\0';
-    return sluice_scene_load(name, &o, out, err, err_size);
+    return sr_scene_load(name, &o, out, err, err_size);
 }
 
 /* ------------------------------------------------------------------ */
@@ -71,27 +71,27 @@ static void cross3(const double *a, const double *b, double *c)
     c[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-static void geometric_normal(const sluice_scene *s, size_t t, double *n)
+static void geometric_normal(const sr_scene *s, size_t t, double *n)
 {
-    const float *p = sluice_scene_positions(s);
-    const uint32_t *ix = sluice_scene_indices(s) + 3 * t;
+    const float *p = sr_scene_positions(s);
+    const uint32_t *ix = sr_scene_indices(s) + 3 * t;
     double e1[3], e2[3];
     sub3(p + 3 * (size_t)ix[1], p + 3 * (size_t)ix[0], e1);
     sub3(p + 3 * (size_t)ix[2], p + 3 * (size_t)ix[0], e2);
     cross3(e1, e2, n);
 }
 
-static void check_invariants(const char *name, const sluice_scene *s)
+static void check_invariants(const char *name, const sr_scene *s)
 {
-    const sluice_scene_stats *st = sluice_scene_statistics(s);
-    size_t nv = sluice_scene_vertex_count(s), nt = sluice_scene_triangle_count(s);
-    size_t nm = sluice_scene_material_count(s);
+    const sr_scene_stats *st = sr_scene_statistics(s);
+    size_t nv = sr_scene_vertex_count(s), nt = sr_scene_triangle_count(s);
+    size_t nm = sr_scene_material_count(s);
     CHECK(st->triangles == nt && st->vertices == nv && st->materials == nm, "%s: stats counts",
           name);
-    const uint32_t *ix = sluice_scene_indices(s), *tm = sluice_scene_triangle_materials(s);
-    const float *p = sluice_scene_positions(s), *n = sluice_scene_normals(s);
-    const sluice_material *m = sluice_scene_materials(s);
-    size_t bad_index = 0, bad_mat = 0, by_kind[SLUICE_MATERIAL_KIND_COUNT] = {0}, emissive = 0;
+    const uint32_t *ix = sr_scene_indices(s), *tm = sr_scene_triangle_materials(s);
+    const float *p = sr_scene_positions(s), *n = sr_scene_normals(s);
+    const sr_material *m = sr_scene_materials(s);
+    size_t bad_index = 0, bad_mat = 0, by_kind[SR_MATERIAL_KIND_COUNT] = {0}, emissive = 0;
     for (size_t t = 0; t < nt; ++t) {
         for (int k = 0; k < 3; ++k)
             bad_index += ix[3 * t + k] >= nv;
@@ -100,23 +100,22 @@ static void check_invariants(const char *name, const sluice_scene *s)
             continue;
         }
         by_kind[m[tm[t]].kind]++;
-        emissive += sluice_material_is_emissive(&m[tm[t]]) != 0;
+        emissive += sr_material_is_emissive(&m[tm[t]]) != 0;
     }
     CHECK(bad_index == 0 && bad_mat == 0, "%s: %zu bad indices, %zu bad materials", name, bad_index,
           bad_mat);
     unsigned kinds = 0;
     size_t sum = 0;
-    for (int k = 0; k < SLUICE_MATERIAL_KIND_COUNT; ++k) {
+    for (int k = 0; k < SR_MATERIAL_KIND_COUNT; ++k) {
         CHECK(by_kind[k] == st->triangles_by_kind[k], "%s: kind %d: %zu vs %zu", name, k,
               by_kind[k], st->triangles_by_kind[k]);
-        kinds |= by_kind[k] ? SLUICE_KIND_BIT(k) : 0u;
+        kinds |= by_kind[k] ? SR_KIND_BIT(k) : 0u;
         sum += st->triangles_by_kind[k];
     }
     CHECK(sum == nt && kinds == st->kinds_present, "%s: kinds", name);
     CHECK(emissive == st->emissive_triangles, "%s: emissive %zu vs %zu", name, emissive,
           st->emissive_triangles);
-    CHECK(sluice_scene_light_count(s) == st->point_lights + st->emissive_triangles, "%s: lights",
-          name);
+    CHECK(sr_scene_light_count(s) == st->point_lights + st->emissive_triangles, "%s: lights", name);
     /* bounds enclose every vertex and are attained */
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < nv; ++i) {
@@ -159,8 +158,8 @@ static void check_invariants(const char *name, const sluice_scene *s)
           with_normals);
     CHECK(st->has_normals == (n != NULL), "%s: has_normals", name);
     /* the area-light table */
-    sluice_area_lights al;
-    sluice_scene_area_lights(s, &al);
+    sr_area_lights al;
+    sr_scene_area_lights(s, &al);
     CHECK(al.count == st->emissive_triangles, "%s: area light count", name);
     double area = 0.0;
     int cdf_ok = 1;
@@ -170,14 +169,14 @@ static void check_invariants(const char *name, const sluice_scene *s)
         double a = 0.5 * sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
         cdf_ok &= fabs(a - al.area[i]) <= 1e-5 * a;
         cdf_ok &= i == 0 || al.area_cdf[i] >= al.area_cdf[i - 1];
-        cdf_ok &= sluice_material_is_emissive(&m[tm[al.triangles[i]]]);
+        cdf_ok &= sr_material_is_emissive(&m[tm[al.triangles[i]]]);
         area += a;
     }
     cdf_ok &= al.count == 0 || al.area_cdf[al.count - 1] == 1.0f;
     CHECK(cdf_ok && fabs(area - al.total_area) <= 1e-6 * area, "%s: area-light table", name);
-    const sluice_camera *c = sluice_scene_camera(s);
-    CHECK(c->width >= 1 && c->width <= SLUICE_SCENE_MAX_IMAGE_SIDE && c->height >= 1 &&
-              c->height <= SLUICE_SCENE_MAX_IMAGE_SIDE && c->vfov > 0.0f && c->vfov < 180.0f,
+    const sr_camera *c = sr_scene_camera(s);
+    CHECK(c->width >= 1 && c->width <= SR_SCENE_MAX_IMAGE_SIDE && c->height >= 1 &&
+              c->height <= SR_SCENE_MAX_IMAGE_SIDE && c->vfov > 0.0f && c->vfov < 180.0f,
           "%s: camera", name);
 }
 
@@ -216,10 +215,10 @@ static int near(float a, float b, float tol)
 static void test_builtins(void)
 {
     /* every listed name has a description and loads (spheres:N as spheres:5) */
-    for (const char *const *n = sluice_scene_builtin_names(); *n; ++n) {
-        CHECK(sluice_scene_builtin_description(*n) != NULL, "%s: no description", *n);
+    for (const char *const *n = sr_scene_builtin_names(); *n; ++n) {
+        CHECK(sr_scene_builtin_description(*n) != NULL, "%s: no description", *n);
         const char *name = strcmp(*n, "spheres:N") == 0 ? "spheres:5" : *n;
-        CHECK(sluice_scene_is_builtin(name), "%s: not recognised", name);
+        CHECK(sr_scene_is_builtin(name), "%s: not recognised", name);
     }
     char err[1024];
     for (size_t i = 0; i < sizeof builtin_expected / sizeof builtin_expected[0]; ++i) {
@@ -228,12 +227,12 @@ static void test_builtins(void)
             fprintf(stderr, "skipping bunny: %s missing (apt install glmark2-data)\n", BUNNY_PATH);
             continue;
         }
-        sluice_scene *s = NULL;
+        sr_scene *s = NULL;
         sluice_status st = load(e->name, 0, &s, err, sizeof err);
         CHECK(st == SLUICE_OK && s, "%s: %s", e->name, err);
         if (!s)
             continue;
-        const sluice_scene_stats *ss = sluice_scene_statistics(s);
+        const sr_scene_stats *ss = sr_scene_statistics(s);
         CHECK(ss->triangles == e->triangles, "%s: %zu triangles, expected %zu", e->name,
               ss->triangles, e->triangles);
         const float tol = 1e-5f;
@@ -243,9 +242,9 @@ static void test_builtins(void)
                   "%s: bounds axis %d: [%.7g, %.7g], expected [%.7g, %.7g]", e->name, k,
                   ss->bounds_min[k], ss->bounds_max[k], e->min[k], e->max[k]);
         CHECK(ss->degenerate_dropped == 0 && ss->warnings == 0, "%s: %zu dropped, %zu warnings: %s",
-              e->name, ss->degenerate_dropped, ss->warnings, sluice_scene_warnings(s));
+              e->name, ss->degenerate_dropped, ss->warnings, sr_scene_warnings(s));
         check_invariants(e->name, s);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
 }
 
@@ -254,26 +253,26 @@ static void test_builtins(void)
 static void test_cornell(void)
 {
     char err[512];
-    sluice_scene *s = NULL;
+    sr_scene *s = NULL;
     CHECK(load("cornell", 0, &s, err, sizeof err) == SLUICE_OK, "cornell: %s", err);
     if (!s)
         return;
-    sluice_area_lights al;
-    sluice_scene_area_lights(s, &al);
+    sr_area_lights al;
+    sr_scene_area_lights(s, &al);
     CHECK(al.count == 2 && fabs(al.total_area - 13650.0) < 1e-3, "cornell light: %zu, area %g",
           al.count, al.total_area);
     CHECK(fabs(al.total_power[0] - 3.14159265358979 * 17.0 * 13650.0) < 1.0, "cornell power %g",
           al.total_power[0]);
-    const sluice_camera *c = sluice_scene_camera(s);
+    const sr_camera *c = sr_scene_camera(s);
     CHECK(c->eye[0] == 278.0f && c->eye[1] == 273.0f && c->eye[2] == -800.0f &&
               fabsf(c->vfov - 39.3076f) < 1e-3f && c->width == 512 && c->height == 512,
           "cornell camera");
-    const float *p = sluice_scene_positions(s);
-    const uint32_t *ix = sluice_scene_indices(s);
+    const float *p = sr_scene_positions(s);
+    const uint32_t *ix = sr_scene_indices(s);
     const double room[3] = {278, 274.4, 279.6}, short_c[3] = {186, 82.5, 168.5},
                  tall_c[3] = {368.5, 165, 351.5};
     size_t wrong = 0, blocks = 0;
-    for (size_t t = 0; t < sluice_scene_triangle_count(s); ++t) {
+    for (size_t t = 0; t < sr_scene_triangle_count(s); ++t) {
         double g[3], cen[3] = {0, 0, 0};
         geometric_normal(s, t, g);
         int block = 1;
@@ -303,17 +302,17 @@ static void test_cornell(void)
     }
     CHECK(blocks == 20 && wrong == 0, "cornell: %zu block triangles, %zu facing the wrong way",
           blocks, wrong);
-    sluice_scene_destroy(s);
+    sr_scene_destroy(s);
 
     CHECK(load("cornell-point", 0, &s, err, sizeof err) == SLUICE_OK, "cornell-point: %s", err);
     if (s) {
-        const sluice_point_light *l = sluice_scene_point_lights(s);
-        CHECK(sluice_scene_point_light_count(s) == 1 && l[0].position[0] == 278.0f &&
+        const sr_point_light *l = sr_scene_point_lights(s);
+        CHECK(sr_scene_point_light_count(s) == 1 && l[0].position[0] == 278.0f &&
                   l[0].position[1] < 548.8f && l[0].position[1] > 500.0f &&
                   l[0].position[2] == 279.5f,
               "cornell-point light");
-        CHECK(sluice_scene_statistics(s)->emissive_triangles == 0, "cornell-point: no area light");
-        sluice_scene_destroy(s);
+        CHECK(sr_scene_statistics(s)->emissive_triangles == 0, "cornell-point: no area light");
+        sr_scene_destroy(s);
     }
 }
 
@@ -323,16 +322,15 @@ static void test_bad_builtins(void)
                          "spheres:",  "spheres:12x", "spheres: 5", "spheres:100001"};
     char err[512];
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
-        sluice_scene *s = NULL;
+        sr_scene *s = NULL;
         sluice_status st = load(bad[i], 0, &s, err, sizeof err);
         CHECK(st == SLUICE_ERROR_INVALID_ARGUMENT && !s && strstr(err, bad[i]) &&
                   strstr(err, "1 to 100000"),
               "%s: %s (%s)", bad[i], sluice_status_string(st), err);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
-    sluice_scene *s = NULL;
-    CHECK(sluice_scene_load_builtin("nosuch", NULL, &s, err, sizeof err) ==
-                  SLUICE_ERROR_NOT_FOUND &&
+    sr_scene *s = NULL;
+    CHECK(sr_scene_load_builtin("nosuch", NULL, &s, err, sizeof err) == SLUICE_ERROR_NOT_FOUND &&
               strstr(err, "nosuch"),
           "unknown built-in: %s", err);
 }
@@ -361,14 +359,14 @@ static int cmp_vertex(const void *a, const void *b)
     return 0;
 }
 
-static int closed_manifold(const sluice_scene *s)
+static int closed_manifold(const sr_scene *s)
 {
-    size_t nt = sluice_scene_triangle_count(s), nv = sluice_scene_vertex_count(s);
-    const uint32_t *ix = sluice_scene_indices(s);
+    size_t nt = sr_scene_triangle_count(s), nv = sr_scene_vertex_count(s);
+    const uint32_t *ix = sr_scene_indices(s);
     uint32_t *order = malloc(nv * sizeof *order), *weld = malloc(nv * sizeof *weld);
     for (size_t i = 0; i < nv; ++i)
         order[i] = (uint32_t)i;
-    weld_pos = sluice_scene_positions(s);
+    weld_pos = sr_scene_positions(s);
     qsort(order, nv, sizeof *order, cmp_vertex);
     for (size_t i = 0; i < nv; ++i)
         weld[order[i]] =
@@ -393,12 +391,12 @@ static int closed_manifold(const sluice_scene *s)
     return ok;
 }
 
-static double signed_volume(const sluice_scene *s)
+static double signed_volume(const sr_scene *s)
 {
-    const float *p = sluice_scene_positions(s);
-    const uint32_t *ix = sluice_scene_indices(s);
+    const float *p = sr_scene_positions(s);
+    const uint32_t *ix = sr_scene_indices(s);
     double v = 0.0;
-    for (size_t t = 0; t < sluice_scene_triangle_count(s); ++t) {
+    for (size_t t = 0; t < sr_scene_triangle_count(s); ++t) {
         const float *a = p + 3 * (size_t)ix[3 * t], *b = p + 3 * (size_t)ix[3 * t + 1],
                     *c = p + 3 * (size_t)ix[3 * t + 2];
         double bc[3], ad[3] = {a[0], a[1], a[2]}, bd[3] = {b[0], b[1], b[2]},
@@ -410,23 +408,23 @@ static double signed_volume(const sluice_scene *s)
 }
 
 /* A builder with one diffuse material and a point light. */
-static sluice_scene_builder *new_builder(const char *name, uint32_t *mat)
+static sr_scene_builder *new_builder(const char *name, uint32_t *mat)
 {
-    sluice_scene_builder *b = NULL;
-    CHECK(sluice_scene_builder_create(name, &b) == SLUICE_OK, "builder_create");
-    sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, "grey");
-    CHECK(sluice_scene_builder_add_material(b, &m, mat, NULL, 0) == SLUICE_OK, "add_material");
-    sluice_point_light l = {{0, 10, 0}, {1, 1, 1}};
-    CHECK(sluice_scene_builder_add_point_light(b, &l, NULL, 0) == SLUICE_OK, "add_point_light");
+    sr_scene_builder *b = NULL;
+    CHECK(sr_scene_builder_create(name, &b) == SLUICE_OK, "builder_create");
+    sr_material m = sr_material_make(SR_MATERIAL_DIFFUSE, "grey");
+    CHECK(sr_scene_builder_add_material(b, &m, mat, NULL, 0) == SLUICE_OK, "add_material");
+    sr_point_light l = {{0, 10, 0}, {1, 1, 1}};
+    CHECK(sr_scene_builder_add_point_light(b, &l, NULL, 0) == SLUICE_OK, "add_point_light");
     return b;
 }
 
-static sluice_scene *finish(sluice_scene_builder *b, const char *what)
+static sr_scene *finish(sr_scene_builder *b, const char *what)
 {
     char err[512] = "";
-    sluice_scene *s = NULL;
-    CHECK(sluice_scene_builder_finish(b, 0, &s, err, sizeof err) == SLUICE_OK, "%s: %s", what, err);
-    sluice_scene_builder_destroy(b);
+    sr_scene *s = NULL;
+    CHECK(sr_scene_builder_finish(b, 0, &s, err, sizeof err) == SLUICE_OK, "%s: %s", what, err);
+    sr_scene_builder_destroy(b);
     return s;
 }
 
@@ -435,20 +433,20 @@ static void test_shapes(void)
     char err[512];
     uint32_t m = 0;
     for (unsigned f = 1; f <= 8; f *= 2) {
-        sluice_scene_builder *b = new_builder("sphere", &m);
+        sr_scene_builder *b = new_builder("sphere", &m);
         const float c[3] = {1, 2, 3};
-        CHECK(sluice_scene_builder_add_sphere(b, c, 2.0f, f, m, NULL, err, sizeof err) == SLUICE_OK,
+        CHECK(sr_scene_builder_add_sphere(b, c, 2.0f, f, m, NULL, err, sizeof err) == SLUICE_OK,
               "sphere %u: %s", f, err);
-        sluice_scene *s = finish(b, "sphere");
+        sr_scene *s = finish(b, "sphere");
         if (!s)
             continue;
-        CHECK(sluice_scene_triangle_count(s) == 20u * f * f &&
-                  sluice_scene_vertex_count(s) == 10u * f * f + 2,
-              "sphere %u: %zu triangles, %zu vertices", f, sluice_scene_triangle_count(s),
-              sluice_scene_vertex_count(s));
-        const float *p = sluice_scene_positions(s);
+        CHECK(sr_scene_triangle_count(s) == 20u * f * f &&
+                  sr_scene_vertex_count(s) == 10u * f * f + 2,
+              "sphere %u: %zu triangles, %zu vertices", f, sr_scene_triangle_count(s),
+              sr_scene_vertex_count(s));
+        const float *p = sr_scene_positions(s);
         double worst = 0.0;
-        for (size_t i = 0; i < sluice_scene_vertex_count(s); ++i) {
+        for (size_t i = 0; i < sr_scene_vertex_count(s); ++i) {
             double d = sqrt((p[3 * i] - 1.0) * (p[3 * i] - 1.0) +
                             (p[3 * i + 1] - 2.0) * (p[3 * i + 1] - 2.0) +
                             (p[3 * i + 2] - 3.0) * (p[3 * i + 2] - 3.0));
@@ -460,54 +458,54 @@ static void test_shapes(void)
         CHECK(v > 0.0 && v < ball && (f < 8 || v > 0.98 * ball), "sphere %u: volume %g of %g", f, v,
               ball);
         check_invariants("sphere", s);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
 
     /* box: closed, outward, 12 triangles */
-    sluice_scene_builder *b = new_builder("box", &m);
+    sr_scene_builder *b = new_builder("box", &m);
     const float lo[3] = {-1, -2, -3}, hi[3] = {1, 2, 3};
-    CHECK(sluice_scene_builder_add_box(b, lo, hi, m, NULL, err, sizeof err) == SLUICE_OK, "box: %s",
+    CHECK(sr_scene_builder_add_box(b, lo, hi, m, NULL, err, sizeof err) == SLUICE_OK, "box: %s",
           err);
-    sluice_scene *s = finish(b, "box");
+    sr_scene *s = finish(b, "box");
     if (s) {
-        CHECK(sluice_scene_triangle_count(s) == 12 && closed_manifold(s) &&
+        CHECK(sr_scene_triangle_count(s) == 12 && closed_manifold(s) &&
                   fabs(signed_volume(s) - 48.0) < 1e-9,
               "box: volume %g", signed_volume(s));
         check_invariants("box", s);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
 
     /* ring: closed, 8 triangles per segment, volume of the annulus */
     b = new_builder("ring", &m);
     const float c0[3] = {0, 0, 0};
-    CHECK(sluice_scene_builder_add_ring(b, c0, 1.0f, 0.1f, 0.5f, 64, m, NULL, err, sizeof err) ==
+    CHECK(sr_scene_builder_add_ring(b, c0, 1.0f, 0.1f, 0.5f, 64, m, NULL, err, sizeof err) ==
               SLUICE_OK,
           "ring: %s", err);
     s = finish(b, "ring");
     if (s) {
         double annulus = 3.14159265358979 * (1.0 - 0.81) * 0.5;
-        CHECK(sluice_scene_triangle_count(s) == 8 * 64 && closed_manifold(s) &&
+        CHECK(sr_scene_triangle_count(s) == 8 * 64 && closed_manifold(s) &&
                   fabs(signed_volume(s) - annulus) < 0.01 * annulus,
-              "ring: %zu triangles, volume %g vs %g", sluice_scene_triangle_count(s),
-              signed_volume(s), annulus);
+              "ring: %zu triangles, volume %g vs %g", sr_scene_triangle_count(s), signed_volume(s),
+              annulus);
         check_invariants("ring", s);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
 
     /* teapot: count formula, bounds, mirror symmetry (checks the data) */
     for (unsigned n = 2; n <= 8; n += n < 4 ? 1 : 4) {
         b = new_builder("teapot", &m);
-        CHECK(sluice_scene_builder_add_teapot(b, n, m, NULL, err, sizeof err) == SLUICE_OK,
+        CHECK(sr_scene_builder_add_teapot(b, n, m, NULL, err, sizeof err) == SLUICE_OK,
               "teapot %u: %s", n, err);
         s = finish(b, "teapot");
         if (!s)
             continue;
-        CHECK(sluice_scene_triangle_count(s) == SLUICE_TEAPOT_TRIANGLES(n),
-              "teapot %u: %zu triangles, expected %u", n, sluice_scene_triangle_count(s),
-              SLUICE_TEAPOT_TRIANGLES(n));
-        if (n >= 3) /* see sluice_scene_builder_add_teapot */
+        CHECK(sr_scene_triangle_count(s) == SR_TEAPOT_TRIANGLES(n),
+              "teapot %u: %zu triangles, expected %u", n, sr_scene_triangle_count(s),
+              SR_TEAPOT_TRIANGLES(n));
+        if (n >= 3) /* see sr_scene_builder_add_teapot */
             check_invariants("teapot", s);
-        const sluice_scene_stats *st = sluice_scene_statistics(s);
+        const sr_scene_stats *st = sr_scene_statistics(s);
         if (n == 8) {
             /* y up: x from the handle (-3) to the spout's tip, y from the
              * bottom (0) to the knob (3.15), z within the body (+-2) */
@@ -520,8 +518,8 @@ static void test_shapes(void)
         }
         /* mirror image in z = 0: the teapot's two halves come from separate
          * entries of the published data, so this catches a mistyped point */
-        size_t nv = sluice_scene_vertex_count(s);
-        const float *p = sluice_scene_positions(s);
+        size_t nv = sr_scene_vertex_count(s);
+        const float *p = sr_scene_positions(s);
         uint64_t *a = malloc(nv * sizeof *a), *mi = malloc(nv * sizeof *mi);
         for (size_t i = 0; i < nv; ++i) {
             int64_t qx = llround(p[3 * i] * 1e4), qy = llround(p[3 * i + 1] * 1e4),
@@ -540,7 +538,7 @@ static void test_shapes(void)
               nv);
         free(a);
         free(mi);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
 }
 
@@ -593,12 +591,12 @@ static tri9 canonical(const float *p0, const float *p1, const float *p2)
     return t;
 }
 
-static tri9 *canonical_scene(const sluice_scene *s)
+static tri9 *canonical_scene(const sr_scene *s)
 {
-    size_t nt = sluice_scene_triangle_count(s);
+    size_t nt = sr_scene_triangle_count(s);
     tri9 *t = malloc((nt ? nt : 1) * sizeof *t);
-    const float *p = sluice_scene_positions(s);
-    const uint32_t *ix = sluice_scene_indices(s);
+    const float *p = sr_scene_positions(s);
+    const uint32_t *ix = sr_scene_indices(s);
     for (size_t i = 0; i < nt; ++i)
         t[i] = canonical(p + 3 * (size_t)ix[3 * i], p + 3 * (size_t)ix[3 * i + 1],
                          p + 3 * (size_t)ix[3 * i + 2]);
@@ -696,53 +694,53 @@ static void test_mesh_formats(void)
     const char *files[] = {"scene_test_mesh.obj", "scene_test_mesh.ply", "scene_test_mesh.gltf"};
     char err[1024];
     for (int i = 0; i < 3; ++i) {
-        sluice_scene *s = NULL;
+        sr_scene *s = NULL;
         sluice_status st = load(files[i], 0, &s, err, sizeof err);
         CHECK(st == SLUICE_OK && s, "%s: %s", files[i], err);
         if (!s)
             continue;
-        CHECK(sluice_scene_triangle_count(s) == 10, "%s: %zu triangles", files[i],
-              sluice_scene_triangle_count(s));
-        if (sluice_scene_triangle_count(s) == 10) {
+        CHECK(sr_scene_triangle_count(s) == 10, "%s: %zu triangles", files[i],
+              sr_scene_triangle_count(s));
+        if (sr_scene_triangle_count(s) == 10) {
             tri9 *t = canonical_scene(s);
             CHECK(memcmp(t, ref, sizeof ref) == 0, "%s: triangles differ from the reference",
                   files[i]);
             free(t);
         }
         /* shared corners are joined: 6 + 4 vertices */
-        CHECK(sluice_scene_vertex_count(s) == 10, "%s: %zu vertices", files[i],
-              sluice_scene_vertex_count(s));
+        CHECK(sr_scene_vertex_count(s) == 10, "%s: %zu vertices", files[i],
+              sr_scene_vertex_count(s));
         /* a mesh file gets the default camera and light */
-        const sluice_scene_stats *ss = sluice_scene_statistics(s);
-        CHECK(ss->point_lights == 1 && strstr(sluice_scene_warnings(s), "default point light"),
+        const sr_scene_stats *ss = sr_scene_statistics(s);
+        CHECK(ss->point_lights == 1 && strstr(sr_scene_warnings(s), "default point light"),
               "%s: default light", files[i]);
-        const sluice_camera *c = sluice_scene_camera(s);
+        const sr_camera *c = sr_scene_camera(s);
         CHECK(near(c->look_at[0], 2.0f, 1e-6f) && near(c->look_at[1], 0.0f, 1e-6f) &&
                   near(c->look_at[2], 0.0f, 1e-6f) && c->eye[2] > 1.0f,
               "%s: default camera looks at (%g, %g, %g)", files[i], c->look_at[0], c->look_at[1],
               c->look_at[2]);
         CHECK(ss->has_normals == (i == 1), "%s: normals %d", files[i], ss->has_normals);
         check_invariants(files[i], s);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
     /* the glTF node's translation is applied */
     write_gltf("scene_test_moved.gltf", 10.0f);
-    sluice_scene *s = NULL;
+    sr_scene *s = NULL;
     CHECK(load("scene_test_moved.gltf", 0, &s, err, sizeof err) == SLUICE_OK, "moved: %s", err);
     if (s) {
-        const sluice_scene_stats *ss = sluice_scene_statistics(s);
+        const sr_scene_stats *ss = sr_scene_statistics(s);
         CHECK(ss->bounds_min[0] == 9.0f && ss->bounds_max[0] == 15.0f, "gltf translation: %g %g",
               ss->bounds_min[0], ss->bounds_max[0]);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
     /* polygons are triangulated, lines dropped */
     write_file("scene_test_poly.obj", "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\n"
                                       "f 1 2 3 4 5\nl 1 3\n");
     CHECK(load("scene_test_poly.obj", 0, &s, err, sizeof err) == SLUICE_OK, "poly: %s", err);
     if (s) {
-        CHECK(sluice_scene_triangle_count(s) == 3, "pentagon: %zu triangles",
-              sluice_scene_triangle_count(s));
-        sluice_scene_destroy(s);
+        CHECK(sr_scene_triangle_count(s) == 3, "pentagon: %zu triangles",
+              sr_scene_triangle_count(s));
+        sr_scene_destroy(s);
     }
 }
 
@@ -766,28 +764,27 @@ static void test_mtl(void)
     }
     fclose(f);
     char err[512];
-    sluice_scene *s = NULL;
+    sr_scene *s = NULL;
     CHECK(load("scene_test_mats.obj", 0, &s, err, sizeof err) == SLUICE_OK, "mtl: %s", err);
     if (!s)
         return;
-    const sluice_material *m = sluice_scene_materials(s);
-    const uint32_t *tm = sluice_scene_triangle_materials(s);
-    const float *p = sluice_scene_positions(s);
-    const uint32_t *ix = sluice_scene_indices(s);
-    const sluice_material *by[7] = {0};
-    for (size_t t = 0; t < sluice_scene_triangle_count(s); ++t) {
+    const sr_material *m = sr_scene_materials(s);
+    const uint32_t *tm = sr_scene_triangle_materials(s);
+    const float *p = sr_scene_positions(s);
+    const uint32_t *ix = sr_scene_indices(s);
+    const sr_material *by[7] = {0};
+    for (size_t t = 0; t < sr_scene_triangle_count(s); ++t) {
         int slot =
             (int)lroundf(fminf(p[3 * (size_t)ix[3 * t]], p[3 * (size_t)ix[3 * t + 1]]) / 2.0f);
         if (slot >= 0 && slot < 7)
             by[slot] = &m[tm[t]];
     }
-    const sluice_material_kind want[7] = {SLUICE_MATERIAL_DIFFUSE, SLUICE_MATERIAL_GLOSSY,
-                                          SLUICE_MATERIAL_DIFFUSE, SLUICE_MATERIAL_MIRROR,
-                                          SLUICE_MATERIAL_GLASS,   SLUICE_MATERIAL_EMISSIVE,
-                                          SLUICE_MATERIAL_GLOSSY};
+    const sr_material_kind want[7] = {SR_MATERIAL_DIFFUSE, SR_MATERIAL_GLOSSY, SR_MATERIAL_DIFFUSE,
+                                      SR_MATERIAL_MIRROR,  SR_MATERIAL_GLASS,  SR_MATERIAL_EMISSIVE,
+                                      SR_MATERIAL_GLOSSY};
     for (int i = 0; i < 7; ++i) {
         CHECK(by[i] && by[i]->kind == want[i] && strcmp(by[i]->name, names[i]) == 0,
-              "mtl %s: kind %s", names[i], by[i] ? sluice_material_kind_name(by[i]->kind) : "-");
+              "mtl %s: kind %s", names[i], by[i] ? sr_material_kind_name(by[i]->kind) : "-");
     }
     if (by[0] && by[1] && by[3] && by[4] && by[5]) {
         CHECK(by[0]->albedo[0] == 0.5f && by[0]->albedo[1] == 0.4f && by[0]->albedo[2] == 0.3f,
@@ -802,15 +799,15 @@ static void test_mtl(void)
                   by[5]->emission[2] == 3.0f,
               "lamp Ke");
     }
-    const sluice_scene_stats *st = sluice_scene_statistics(s);
+    const sr_scene_stats *st = sr_scene_statistics(s);
     /* the lamp lights the scene: no default light */
     CHECK(st->emissive_triangles == 1 && st->point_lights == 0, "mtl lights: %zu area, %zu point",
           st->emissive_triangles, st->point_lights);
-    CHECK(strstr(sluice_scene_warnings(s), "'hot'") &&
-              strstr(sluice_scene_warnings(s), "energy conserving"),
-          "kd + ks > 1 warning: %s", sluice_scene_warnings(s));
+    CHECK(strstr(sr_scene_warnings(s), "'hot'") &&
+              strstr(sr_scene_warnings(s), "energy conserving"),
+          "kd + ks > 1 warning: %s", sr_scene_warnings(s));
     check_invariants("mtl", s);
-    sluice_scene_destroy(s);
+    sr_scene_destroy(s);
 }
 
 /* ------------------------------------------------------------------ */
@@ -822,7 +819,7 @@ static const char *json_head = "{\"materials\": {\"m\": {\"kind\": \"diffuse\"}}
 
 /* Writes {json_head + body} and loads it. */
 static sluice_status load_json_text(const char *path, const char *body, unsigned flags,
-                                    sluice_scene **out, char *err, size_t err_size)
+                                    sr_scene **out, char *err, size_t err_size)
 {
     FILE *f = fopen(path, "wb");
     fprintf(f, "%s%s", json_head, body);
@@ -833,26 +830,25 @@ static sluice_status load_json_text(const char *path, const char *body, unsigned
 static void test_json(void)
 {
     char err[1024];
-    sluice_scene *s = NULL;
+    sr_scene *s = NULL;
     /* the example scene under scenes/ */
     if (file_exists(BUNNY_PATH)) {
         sluice_status st = load(SCENE_SOURCE_ROOT "/scenes/example.json", 0, &s, err, sizeof err);
         CHECK(st == SLUICE_OK, "example.json: %s", err);
         if (s) {
-            const sluice_scene_stats *ss = sluice_scene_statistics(s);
+            const sr_scene_stats *ss = sr_scene_statistics(s);
             CHECK(ss->triangles == 72556 && ss->point_lights == 1 && ss->emissive_triangles == 2,
                   "example: %zu triangles", ss->triangles);
-            CHECK(ss->kinds_present == (SLUICE_KIND_BIT(SLUICE_MATERIAL_DIFFUSE) |
-                                        SLUICE_KIND_BIT(SLUICE_MATERIAL_GLASS) |
-                                        SLUICE_KIND_BIT(SLUICE_MATERIAL_GLOSSY) |
-                                        SLUICE_KIND_BIT(SLUICE_MATERIAL_EMISSIVE)),
+            CHECK(ss->kinds_present ==
+                      (SR_KIND_BIT(SR_MATERIAL_DIFFUSE) | SR_KIND_BIT(SR_MATERIAL_GLASS) |
+                       SR_KIND_BIT(SR_MATERIAL_GLOSSY) | SR_KIND_BIT(SR_MATERIAL_EMISSIVE)),
                   "example kinds %x", ss->kinds_present);
-            CHECK(sluice_scene_render_settings(s)->mode == SLUICE_RENDER_PATH &&
-                      sluice_scene_render_settings(s)->samples_per_pixel == 4 &&
-                      sluice_scene_camera(s)->width == 640,
+            CHECK(sr_scene_render_settings(s)->mode == SR_RENDER_PATH &&
+                      sr_scene_render_settings(s)->samples_per_pixel == 4 &&
+                      sr_scene_camera(s)->width == 640,
                   "example settings");
             check_invariants("example.json", s);
-            sluice_scene_destroy(s);
+            sr_scene_destroy(s);
         }
     }
 
@@ -873,14 +869,14 @@ static void test_json(void)
               "transform %d: %s", i, err);
         if (!s)
             continue;
-        const sluice_scene_stats *ss = sluice_scene_statistics(s);
+        const sr_scene_stats *ss = sr_scene_statistics(s);
         const float emin[3] = {10, 0, -2}, emax[3] = {12, 2, 0};
         for (int k = 0; k < 3; ++k)
             CHECK(near(ss->bounds_min[k], emin[k], 1e-6f) &&
                       near(ss->bounds_max[k], emax[k], 1e-6f),
                   "transform %d axis %d: [%g, %g]", i, k, ss->bounds_min[k], ss->bounds_max[k]);
         CHECK(fabs(signed_volume(s) - 8.0) < 1e-4, "transform %d: volume %g", i, signed_volume(s));
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
     /* a mirroring scale keeps the front side outside */
     CHECK(load_json_text("scene_test_xf.json",
@@ -889,10 +885,9 @@ static void test_json(void)
                          0, &s, err, sizeof err) == SLUICE_OK,
           "mirror: %s", err);
     if (s) {
-        CHECK(fabs(signed_volume(s) - 1.0) < 1e-6 &&
-                  sluice_scene_statistics(s)->bounds_min[0] == -1.0f,
+        CHECK(fabs(signed_volume(s) - 1.0) < 1e-6 && sr_scene_statistics(s)->bounds_min[0] == -1.0f,
               "mirrored box: volume %g", signed_volume(s));
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
     /* a mesh file relative to the JSON file's directory, and shapes */
     write_obj("scene_test_rel.obj");
@@ -909,15 +904,15 @@ static void test_json(void)
                          0, &s, err, sizeof err) == SLUICE_OK,
           "relative file: %s", err);
     if (s) {
-        const sluice_scene_stats *ss = sluice_scene_statistics(s);
-        CHECK(ss->triangles == 10 + 80 + 2 + 128 + SLUICE_TEAPOT_TRIANGLES(4) &&
+        const sr_scene_stats *ss = sr_scene_statistics(s);
+        CHECK(ss->triangles == 10 + 80 + 2 + 128 + SR_TEAPOT_TRIANGLES(4) &&
                   ss->bounds_max[1] == 101.0f,
               "shapes: %zu triangles, max y %g", ss->triangles, ss->bounds_max[1]);
-        CHECK(sluice_scene_render_settings(s)->samples_per_pixel == 16 &&
-                  sluice_scene_render_settings(s)->mode == SLUICE_RENDER_WHITTED,
+        CHECK(sr_scene_render_settings(s)->samples_per_pixel == 16 &&
+                  sr_scene_render_settings(s)->mode == SR_RENDER_WHITTED,
               "render settings");
         check_invariants("shapes.json", s);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
 }
 
@@ -935,7 +930,7 @@ static void expect_error(const char *what, sluice_status got, sluice_status want
 static void test_errors(void)
 {
     char err[1024];
-    sluice_scene *s = NULL;
+    sr_scene *s = NULL;
     sluice_status st;
 
     st = load("scene_test_missing.obj", 0, &s, err, sizeof err);
@@ -974,9 +969,9 @@ static void test_errors(void)
     st = load("scene_test_dark.json", 0, &s, err, sizeof err);
     expect_error("no light", st, SLUICE_ERROR_INVALID_ARGUMENT, err, "scene_test_dark.json",
                  "no light", NULL);
-    st = load("scene_test_dark.json", SLUICE_SCENE_ALLOW_NO_LIGHT, &s, err, sizeof err);
-    CHECK(st == SLUICE_OK && s && sluice_scene_light_count(s) == 0, "allowed no light: %s", err);
-    sluice_scene_destroy(s);
+    st = load("scene_test_dark.json", SR_SCENE_ALLOW_NO_LIGHT, &s, err, sizeof err);
+    CHECK(st == SLUICE_OK && s && sr_scene_light_count(s) == 0, "allowed no light: %s", err);
+    sr_scene_destroy(s);
     s = NULL;
 
     /* image sizes */
@@ -1075,14 +1070,14 @@ static void test_builder(void)
     char err[512];
     uint32_t m = 0;
     /* degenerate triangles are dropped and reported */
-    sluice_scene_builder *b = new_builder("degenerate", &m);
-    sluice_scene_builder_set_warning_callback(b, count_warning, &warnings_seen);
+    sr_scene_builder *b = new_builder("degenerate", &m);
+    sr_scene_builder_set_warning_callback(b, count_warning, &warnings_seen);
     const float p[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 2, 0, 0, 1, 1, 0};
     const uint32_t ix[] = {0, 1, 2, /* fine */ 0,
                            1, 3, /* collinear */
                            2, 2, 4, /* repeated corner */ 1,
                            4, 2 /* fine */};
-    sluice_mesh_desc d;
+    sr_mesh_desc d;
     memset(&d, 0, sizeof d);
     d.source = "test mesh";
     d.positions = p;
@@ -1090,122 +1085,117 @@ static void test_builder(void)
     d.indices = ix;
     d.triangle_count = 4;
     d.material = m;
-    CHECK(sluice_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_OK, "add: %s", err);
+    CHECK(sr_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_OK, "add: %s", err);
     CHECK(warnings_seen == 1, "warning callback called %d times", warnings_seen);
-    sluice_scene *s = finish(b, "degenerate");
+    sr_scene *s = finish(b, "degenerate");
     if (s) {
-        const sluice_scene_stats *st = sluice_scene_statistics(s);
+        const sr_scene_stats *st = sr_scene_statistics(s);
         CHECK(st->triangles == 2 && st->degenerate_dropped == 2 && st->warnings == 1 &&
                   st->vertices == 4,
               "degenerate: %zu triangles, %zu dropped, %zu vertices", st->triangles,
               st->degenerate_dropped, st->vertices);
-        CHECK(strstr(sluice_scene_warnings(s), "test mesh: dropped 2 degenerate") != NULL,
-              "warning text: %s", sluice_scene_warnings(s));
-        sluice_scene_destroy(s);
+        CHECK(strstr(sr_scene_warnings(s), "test mesh: dropped 2 degenerate") != NULL,
+              "warning text: %s", sr_scene_warnings(s));
+        sr_scene_destroy(s);
     }
     /* and from a file */
     write_file("scene_test_degen.obj",
                "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\nf 3 3 2\n");
     CHECK(load("scene_test_degen.obj", 0, &s, err, sizeof err) == SLUICE_OK, "degen obj: %s", err);
     if (s) {
-        CHECK(sluice_scene_statistics(s)->degenerate_dropped == 2 &&
-                  sluice_scene_triangle_count(s) == 1 &&
-                  strstr(sluice_scene_warnings(s), "scene_test_degen.obj"),
-              "degen obj: %zu dropped", sluice_scene_statistics(s)->degenerate_dropped);
-        sluice_scene_destroy(s);
+        CHECK(sr_scene_statistics(s)->degenerate_dropped == 2 && sr_scene_triangle_count(s) == 1 &&
+                  strstr(sr_scene_warnings(s), "scene_test_degen.obj"),
+              "degen obj: %zu dropped", sr_scene_statistics(s)->degenerate_dropped);
+        sr_scene_destroy(s);
     }
     /* only degenerate triangles: empty */
     b = new_builder("flat", &m);
     d.indices = ix + 3;
     d.triangle_count = 2;
-    CHECK(sluice_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_OK, "add flat");
+    CHECK(sr_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_OK, "add flat");
     s = NULL;
-    CHECK(sluice_scene_builder_finish(b, 0, &s, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
+    CHECK(sr_scene_builder_finish(b, 0, &s, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
               strstr(err, "empty") && !s,
           "all degenerate: %s", err);
-    sluice_scene_builder_destroy(b);
+    sr_scene_builder_destroy(b);
 
     /* failed adds leave the builder unchanged */
     b = new_builder("atomic", &m);
     const uint32_t bad_ix[] = {0, 1, 2, 0, 1, 7};
     d.indices = bad_ix;
     d.triangle_count = 2;
-    CHECK(sluice_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
+    CHECK(sr_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
               strstr(err, "test mesh: triangle 1") && strstr(err, "out of range"),
           "index out of range: %s", err);
     d.indices = ix;
     d.material = 9;
-    CHECK(sluice_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
+    CHECK(sr_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
               strstr(err, "material 9 out of range"),
           "material out of range: %s", err);
     d.material = m;
     const float singular[16] = {1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     d.transform = singular;
-    CHECK(sluice_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
+    CHECK(sr_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
               strstr(err, "singular"),
           "singular transform: %s", err);
     const float projective[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1, 1};
     d.transform = projective;
-    CHECK(sluice_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
+    CHECK(sr_scene_builder_add_mesh(b, &d, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
               strstr(err, "not affine"),
           "projective transform: %s", err);
     const float big[16] = {1e30f, 0, 0, 0, 0, 1e30f, 0, 0, 0, 0, 1e30f, 0, 0, 0, 0, 1};
     const float far[] = {1e10f, 0, 0, 0, 1, 0, 0, 0, 1};
     const uint32_t one[] = {0, 1, 2};
-    sluice_mesh_desc o = d;
+    sr_mesh_desc o = d;
     o.positions = far;
     o.vertex_count = 3;
     o.indices = one;
     o.triangle_count = 1;
     o.transform = big;
-    CHECK(sluice_scene_builder_add_mesh(b, &o, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
+    CHECK(sr_scene_builder_add_mesh(b, &o, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
               strstr(err, "vertex 0: transformed position overflows a float"),
           "overflowing transform: %s", err);
-    CHECK(sluice_scene_builder_triangle_count(b) == 0, "failed adds added triangles");
-    sluice_camera cam = {{0, 0, -5}, {0, 0, 0}, {0, 0, 1}, 40, 64, 64};
-    CHECK(sluice_scene_builder_set_camera(b, &cam, err, sizeof err) ==
-                  SLUICE_ERROR_INVALID_ARGUMENT &&
+    CHECK(sr_scene_builder_triangle_count(b) == 0, "failed adds added triangles");
+    sr_camera cam = {{0, 0, -5}, {0, 0, 0}, {0, 0, 1}, 40, 64, 64};
+    CHECK(sr_scene_builder_set_camera(b, &cam, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
               strstr(err, "parallel"),
           "up parallel: %s", err);
     cam.up[1] = 1;
     cam.vfov = 180;
-    CHECK(sluice_scene_builder_set_camera(b, &cam, err, sizeof err) ==
-                  SLUICE_ERROR_INVALID_ARGUMENT &&
+    CHECK(sr_scene_builder_set_camera(b, &cam, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
               strstr(err, "vfov"),
           "vfov 180: %s", err);
     cam.vfov = 40;
     cam.width = 65537;
-    CHECK(sluice_scene_builder_set_camera(b, &cam, err, sizeof err) ==
-                  SLUICE_ERROR_INVALID_ARGUMENT &&
+    CHECK(sr_scene_builder_set_camera(b, &cam, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT &&
               strstr(err, "65537x64"),
           "width 65537: %s", err);
-    sluice_point_light l = {{0, 0, 0}, {-1, 0, 0}};
-    CHECK(sluice_scene_builder_add_point_light(b, &l, err, sizeof err) ==
-              SLUICE_ERROR_INVALID_ARGUMENT,
+    sr_point_light l = {{0, 0, 0}, {-1, 0, 0}};
+    CHECK(sr_scene_builder_add_point_light(b, &l, err, sizeof err) == SLUICE_ERROR_INVALID_ARGUMENT,
           "negative intensity");
-    sluice_scene_builder_destroy(b);
+    sr_scene_builder_destroy(b);
 
     /* normals: mixed meshes get zero normals where none were given, and
      * transformed normals stay unit */
     b = new_builder("normals", &m);
     const float n3[] = {0, 0, 2, 0, 0, 2, 0, 0, 2};
     const float stretch[16] = {3, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-    sluice_mesh_desc a = d;
+    sr_mesh_desc a = d;
     a.positions = p;
     a.vertex_count = 3;
     a.indices = one;
     a.triangle_count = 1;
     a.transform = NULL;
-    CHECK(sluice_scene_builder_add_mesh(b, &a, err, sizeof err) == SLUICE_OK, "no normals");
+    CHECK(sr_scene_builder_add_mesh(b, &a, err, sizeof err) == SLUICE_OK, "no normals");
     a.normals = n3;
     a.transform = stretch;
-    CHECK(sluice_scene_builder_add_mesh(b, &a, err, sizeof err) == SLUICE_OK, "normals");
+    CHECK(sr_scene_builder_add_mesh(b, &a, err, sizeof err) == SLUICE_OK, "normals");
     s = finish(b, "normals");
     if (s) {
-        const float *n = sluice_scene_normals(s);
+        const float *n = sr_scene_normals(s);
         CHECK(n && n[0] == 0 && n[2] == 0 && n[9 + 2] == 1.0f, "normals: %g %g", n ? n[2] : -1,
               n ? n[11] : -1);
-        sluice_scene_destroy(s);
+        sr_scene_destroy(s);
     }
 }
 
@@ -1239,7 +1229,7 @@ static void test_cli(const char *exe)
               strstr(out, "camera"),
           "cornell: rc %d:\n%s", rc, out);
     rc = run(exe, "--list", out, sizeof out);
-    for (const char *const *n = sluice_scene_builtin_names(); *n; ++n)
+    for (const char *const *n = sr_scene_builtin_names(); *n; ++n)
         CHECK(rc == 0 && strstr(out, *n), "--list lacks %s", *n);
     rc = run(exe, "--help", out, sizeof out);
     CHECK(rc == 0 && strstr(out, "usage") && strstr(out, "examples"), "--help: %s", out);

@@ -4,7 +4,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 
-void sluice_set_error(char *err, size_t err_size, const char *fmt, ...)
+void sr_set_error(char *err, size_t err_size, const char *fmt, ...)
 {
     if (!err || !err_size)
         return;

@@ -1,7 +1,7 @@
 /* Error text for the apps' libraries (images, scenes): functions return a
  * sluice_status and describe the failure in a caller's buffer. */
-#ifndef SLUICE_APP_ERROR_H
-#define SLUICE_APP_ERROR_H
+#ifndef SR_APP_ERROR_H
+#define SR_APP_ERROR_H
 
 #include <stddef.h>
 
@@ -12,7 +12,7 @@ extern "C" {
 /** Formats a message into `err` (at most `err_size` bytes, NUL-terminated).
  *  Does nothing when `err` is NULL or `err_size` is 0, so callers may pass
  *  no buffer at all. */
-void sluice_set_error(char *err, size_t err_size, const char *fmt, ...)
+void sr_set_error(char *err, size_t err_size, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
 #endif
@@ -22,4 +22,4 @@ void sluice_set_error(char *err, size_t err_size, const char *fmt, ...)
 }
 #endif
 
-#endif /* SLUICE_APP_ERROR_H */
+#endif /* SR_APP_ERROR_H */

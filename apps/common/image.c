@@ -18,7 +18,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-struct sluice_image {
+struct sr_image {
     unsigned width, height, channels;
     float *pixels;
 };
@@ -28,25 +28,24 @@ struct sluice_image {
 static sluice_status check_size(long long width, long long height, char *msg, size_t msg_size)
 {
     if (width <= 0 || height <= 0) {
-        sluice_set_error(msg, msg_size, "image size %lldx%lld is empty", width, height);
+        sr_set_error(msg, msg_size, "image size %lldx%lld is empty", width, height);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
-    if (width > SLUICE_IMAGE_MAX_SIDE || height > SLUICE_IMAGE_MAX_SIDE ||
-        width * height > (long long)SLUICE_IMAGE_MAX_PIXELS) {
-        sluice_set_error(
-            msg, msg_size,
-            "image size %lldx%lld is too large (at most %u pixels a side and %u pixels)", width,
-            height, SLUICE_IMAGE_MAX_SIDE, SLUICE_IMAGE_MAX_PIXELS);
+    if (width > SR_IMAGE_MAX_SIDE || height > SR_IMAGE_MAX_SIDE ||
+        width * height > (long long)SR_IMAGE_MAX_PIXELS) {
+        sr_set_error(msg, msg_size,
+                     "image size %lldx%lld is too large (at most %u pixels a side and %u pixels)",
+                     width, height, SR_IMAGE_MAX_SIDE, SR_IMAGE_MAX_PIXELS);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     return SLUICE_OK;
 }
 
-sluice_status sluice_image_create(unsigned width, unsigned height, unsigned channels,
-                                  sluice_image **out, char *err, size_t err_size)
+sluice_status sr_image_create(unsigned width, unsigned height, unsigned channels, sr_image **out,
+                              char *err, size_t err_size)
 {
     if (!out) {
-        sluice_set_error(err, err_size, "sluice_image_create: out is NULL");
+        sr_set_error(err, err_size, "sr_image_create: out is NULL");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     *out = NULL;
@@ -54,19 +53,18 @@ sluice_status sluice_image_create(unsigned width, unsigned height, unsigned chan
     if (st != SLUICE_OK)
         return st;
     if (channels != 3 && channels != 4) {
-        sluice_set_error(err, err_size, "images have 3 (RGB) or 4 (RGBA) channels, not %u",
-                         channels);
+        sr_set_error(err, err_size, "images have 3 (RGB) or 4 (RGBA) channels, not %u", channels);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
-    sluice_image *img = malloc(sizeof *img);
+    sr_image *img = malloc(sizeof *img);
     /* At most 2^28 * 4 floats: the product fits a 64-bit size_t. */
     size_t count = (size_t)width * height * channels;
     float *px = calloc(count, sizeof *px);
     if (!img || !px) {
         free(img);
         free(px);
-        sluice_set_error(err, err_size, "out of memory for a %ux%u image of %u channels", width,
-                         height, channels);
+        sr_set_error(err, err_size, "out of memory for a %ux%u image of %u channels", width, height,
+                     channels);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     img->width = width;
@@ -77,7 +75,7 @@ sluice_status sluice_image_create(unsigned width, unsigned height, unsigned chan
     return SLUICE_OK;
 }
 
-void sluice_image_destroy(sluice_image *img)
+void sr_image_destroy(sr_image *img)
 {
     if (!img)
         return;
@@ -85,27 +83,27 @@ void sluice_image_destroy(sluice_image *img)
     free(img);
 }
 
-unsigned sluice_image_width(const sluice_image *img)
+unsigned sr_image_width(const sr_image *img)
 {
     return img ? img->width : 0;
 }
 
-unsigned sluice_image_height(const sluice_image *img)
+unsigned sr_image_height(const sr_image *img)
 {
     return img ? img->height : 0;
 }
 
-unsigned sluice_image_channels(const sluice_image *img)
+unsigned sr_image_channels(const sr_image *img)
 {
     return img ? img->channels : 0;
 }
 
-float *sluice_image_pixels(sluice_image *img)
+float *sr_image_pixels(sr_image *img)
 {
     return img ? img->pixels : NULL;
 }
 
-const float *sluice_image_pixels_const(const sluice_image *img)
+const float *sr_image_pixels_const(const sr_image *img)
 {
     return img ? img->pixels : NULL;
 }
@@ -116,13 +114,13 @@ static double clamp01(double v)
     return !(v > 0.0) ? 0.0 : v > 1.0 ? 1.0 : v;
 }
 
-float sluice_srgb_encode(float linear)
+float sr_srgb_encode(float linear)
 {
     double l = clamp01(linear);
     return (float)(l <= 0.0031308 ? 12.92 * l : 1.055 * pow(l, 1.0 / 2.4) - 0.055);
 }
 
-float sluice_srgb_decode(float encoded)
+float sr_srgb_decode(float encoded)
 {
     double e = clamp01(encoded);
     return (float)(e <= 0.04045 ? e / 12.92 : pow((e + 0.055) / 1.055, 2.4));
@@ -179,15 +177,14 @@ static int sync_file(const char *path)
     return rc;
 }
 
-sluice_status sluice_image_write(const sluice_image *img, const char *path, char *err,
-                                 size_t err_size)
+sluice_status sr_image_write(const sr_image *img, const char *path, char *err, size_t err_size)
 {
     if (!path || !*path) {
-        sluice_set_error(err, err_size, "sluice_image_write: no path given");
+        sr_set_error(err, err_size, "sr_image_write: no path given");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (!img || !img->pixels) {
-        sluice_set_error(err, err_size, "cannot write '%s': no image (NULL)", path);
+        sr_set_error(err, err_size, "cannot write '%s': no image (NULL)", path);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     const char *slash = strrchr(path, '/');
@@ -198,16 +195,16 @@ sluice_status sluice_image_write(const sluice_image *img, const char *path, char
         if (strcasecmp(ext, write_formats[i].ext) == 0)
             kind = (int)write_formats[i].kind;
     if (kind < 0) {
-        sluice_set_error(err, err_size,
-                         "cannot write '%s': unsupported extension '%s' (use .exr, .png or .hdr)",
-                         path, ext ? ext : "");
+        sr_set_error(err, err_size,
+                     "cannot write '%s': unsupported extension '%s' (use .exr, .png or .hdr)", path,
+                     ext ? ext : "");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
 
     const size_t npix = (size_t)img->width * img->height;
     const unsigned c = img->channels;
     unsigned out_c = c;
-    sluice_image_io_type type = SLUICE_IMAGE_IO_FLOAT;
+    sr_image_io_type type = SR_IMAGE_IO_FLOAT;
     const void *data = img->pixels;
     void *converted = NULL;
     if (kind == KIND_PNG) {
@@ -216,12 +213,12 @@ sluice_status sluice_image_write(const sluice_image *img, const char *path, char
             for (size_t i = 0; i < npix * c; ++i) {
                 float v = img->pixels[i];
                 /* Alpha (the fourth channel) is coverage, not colour. */
-                double e = (c == 4 && i % 4 == 3) ? clamp01(v) : sluice_srgb_encode(v);
+                double e = (c == 4 && i % 4 == 3) ? clamp01(v) : sr_srgb_encode(v);
                 q[i] = (uint8_t)(e * 255.0 + 0.5);
             }
         }
         converted = q;
-        type = SLUICE_IMAGE_IO_UINT8;
+        type = SR_IMAGE_IO_UINT8;
     } else if (kind == KIND_HDR && c == 4) {
         /* RGBE holds RGB only. */
         float *rgb = malloc(npix * 3 * sizeof *rgb);
@@ -231,9 +228,9 @@ sluice_status sluice_image_write(const sluice_image *img, const char *path, char
         converted = rgb;
         out_c = 3;
     }
-    if (type == SLUICE_IMAGE_IO_UINT8 || out_c != c) {
+    if (type == SR_IMAGE_IO_UINT8 || out_c != c) {
         if (!converted) {
-            sluice_set_error(err, err_size, "cannot write '%s': out of memory", path);
+            sr_set_error(err, err_size, "cannot write '%s': out of memory", path);
             return SLUICE_ERROR_OUT_OF_MEMORY;
         }
         data = converted;
@@ -242,12 +239,12 @@ sluice_status sluice_image_write(const sluice_image *img, const char *path, char
     char *tmp = temp_path(path, base, ext);
     if (!tmp) {
         free(converted);
-        sluice_set_error(err, err_size, "cannot write '%s': out of memory", path);
+        sr_set_error(err, err_size, "cannot write '%s': out of memory", path);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     char msg[512] = "";
     sluice_status st =
-        sluice_image_io_write(tmp, img->width, img->height, out_c, type, data, msg, sizeof msg);
+        sr_image_io_write(tmp, img->width, img->height, out_c, type, data, msg, sizeof msg);
     free(converted);
     if (st != SLUICE_OK) {
         /* OpenImageIO's message names the temporary file and often not the
@@ -257,17 +254,17 @@ sluice_status sluice_image_write(const sluice_image *img, const char *path, char
                  base > path ? path : ".");
         struct stat sb;
         if (stat(parent, &sb) != 0)
-            sluice_set_error(err, err_size, "cannot write '%s': directory '%s': %s", path, parent,
-                             strerror(errno));
-        else
-            sluice_set_error(err, err_size, "cannot write '%s': %s", path, msg);
-    } else if (sync_file(tmp) != 0) {
-        sluice_set_error(err, err_size, "cannot write '%s': flushing '%s' failed: %s", path, tmp,
+            sr_set_error(err, err_size, "cannot write '%s': directory '%s': %s", path, parent,
                          strerror(errno));
+        else
+            sr_set_error(err, err_size, "cannot write '%s': %s", path, msg);
+    } else if (sync_file(tmp) != 0) {
+        sr_set_error(err, err_size, "cannot write '%s': flushing '%s' failed: %s", path, tmp,
+                     strerror(errno));
         st = SLUICE_ERROR_IO;
     } else if (rename(tmp, path) != 0) {
-        sluice_set_error(err, err_size, "cannot write '%s': renaming '%s' over it failed: %s", path,
-                         tmp, strerror(errno));
+        sr_set_error(err, err_size, "cannot write '%s': renaming '%s' over it failed: %s", path,
+                     tmp, strerror(errno));
         st = SLUICE_ERROR_IO;
     }
     /* Whatever failed, OpenImageIO may have created the file: never leave
@@ -296,9 +293,9 @@ static int colorspace_is_linear(const char *cs)
     return strstr(low, "linear") || strncmp(low, "lin_", 4) == 0 || strcmp(low, "acescg") == 0;
 }
 
-static enum transfer pick_transfer(const sluice_image_io_info *info, unsigned flags)
+static enum transfer pick_transfer(const sr_image_io_info *info, unsigned flags)
 {
-    if ((flags & SLUICE_IMAGE_READ_RAW) || info->is_float || colorspace_is_linear(info->colorspace))
+    if ((flags & SR_IMAGE_READ_RAW) || info->is_float || colorspace_is_linear(info->colorspace))
         return TRANSFER_LINEAR;
     /* OpenImageIO reports a PNG gAMA chunk (and similar) as "GammaX.Y". */
     if (info->gamma > 0.0f && strncasecmp(info->colorspace, "gamma", 5) == 0)
@@ -309,7 +306,7 @@ static enum transfer pick_transfer(const sluice_image_io_info *info, unsigned fl
 /* Which file channels feed R, G, B and A (-1: none; for B, none means 0).
  * Colour comes from the first three channels that are not alpha; one grey
  * channel feeds all three. Returns the channel count of the image. */
-static unsigned map_channels(const sluice_image_io_info *info, int src[4])
+static unsigned map_channels(const sr_image_io_info *info, int src[4])
 {
     int alpha =
         info->alpha_channel >= 0 && info->alpha_channel < info->channels ? info->alpha_channel : -1;
@@ -328,14 +325,13 @@ static unsigned map_channels(const sluice_image_io_info *info, int src[4])
     return alpha >= 0 ? 4u : 3u;
 }
 
-sluice_status sluice_image_read_ex(const char *path, unsigned flags, sluice_image **out, char *err,
-                                   size_t err_size)
+sluice_status sr_image_read_ex(const char *path, unsigned flags, sr_image **out, char *err,
+                               size_t err_size)
 {
     if (out)
         *out = NULL;
     if (!path || !*path || !out) {
-        sluice_set_error(err, err_size, "sluice_image_read: %s",
-                         !out ? "out is NULL" : "no path given");
+        sr_set_error(err, err_size, "sr_image_read: %s", !out ? "out is NULL" : "no path given");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     /* OpenImageIO says "could not open" for every reason; tell a missing
@@ -343,39 +339,39 @@ sluice_status sluice_image_read_ex(const char *path, unsigned flags, sluice_imag
     struct stat sb;
     if (stat(path, &sb) != 0) {
         int e = errno;
-        sluice_set_error(err, err_size, "cannot read '%s': %s", path, strerror(e));
+        sr_set_error(err, err_size, "cannot read '%s': %s", path, strerror(e));
         return e == ENOENT || e == ENOTDIR ? SLUICE_ERROR_NOT_FOUND : SLUICE_ERROR_IO;
     }
     if (S_ISDIR(sb.st_mode)) {
-        sluice_set_error(err, err_size, "cannot read '%s': it is a directory", path);
+        sr_set_error(err, err_size, "cannot read '%s': it is a directory", path);
         return SLUICE_ERROR_IO;
     }
 
     char msg[512] = "";
-    sluice_image_io_info info;
-    sluice_image_io_reader *r = NULL;
-    sluice_status st = sluice_image_io_open(path, &r, &info, msg, sizeof msg);
+    sr_image_io_info info;
+    sr_image_io_reader *r = NULL;
+    sluice_status st = sr_image_io_open(path, &r, &info, msg, sizeof msg);
     if (st != SLUICE_OK) {
-        sluice_set_error(err, err_size, "cannot read '%s': %s", path, msg);
+        sr_set_error(err, err_size, "cannot read '%s': %s", path, msg);
         return st;
     }
-    sluice_image *img = NULL;
+    sr_image *img = NULL;
     float *buf = NULL;
     if (info.depth != 1) {
-        sluice_set_error(err, err_size,
-                         "cannot read '%s': volume images (depth %lld) are not supported", path,
-                         info.depth);
+        sr_set_error(err, err_size,
+                     "cannot read '%s': volume images (depth %lld) are not supported", path,
+                     info.depth);
         st = SLUICE_ERROR_INVALID_ARGUMENT;
         goto done;
     }
     if (info.channels < 1) {
-        sluice_set_error(err, err_size, "cannot read '%s': it has no channels", path);
+        sr_set_error(err, err_size, "cannot read '%s': it has no channels", path);
         st = SLUICE_ERROR_IO;
         goto done;
     }
     st = check_size(info.width, info.height, msg, sizeof msg);
     if (st != SLUICE_OK) {
-        sluice_set_error(err, err_size, "cannot read '%s': %s", path, msg);
+        sr_set_error(err, err_size, "cannot read '%s': %s", path, msg);
         goto done;
     }
     int src[4];
@@ -386,17 +382,17 @@ sluice_status sluice_image_read_ex(const char *path, unsigned flags, sluice_imag
             chend = src[i] + 1;
     const size_t npix = (size_t)info.width * (size_t)info.height;
     buf = malloc(npix * (size_t)chend * sizeof *buf);
-    st = buf ? sluice_image_create((unsigned)info.width, (unsigned)info.height, c, &img, msg,
-                                   sizeof msg)
-             : SLUICE_ERROR_OUT_OF_MEMORY;
+    st =
+        buf ? sr_image_create((unsigned)info.width, (unsigned)info.height, c, &img, msg, sizeof msg)
+            : SLUICE_ERROR_OUT_OF_MEMORY;
     if (st != SLUICE_OK) {
-        sluice_set_error(err, err_size, "cannot read '%s': out of memory for %lldx%lld pixels",
-                         path, info.width, info.height);
+        sr_set_error(err, err_size, "cannot read '%s': out of memory for %lldx%lld pixels", path,
+                     info.width, info.height);
         goto done;
     }
-    st = sluice_image_io_read(r, 0, chend, buf, msg, sizeof msg);
+    st = sr_image_io_read(r, 0, chend, buf, msg, sizeof msg);
     if (st != SLUICE_OK) {
-        sluice_set_error(err, err_size, "cannot read '%s': %s", path, msg);
+        sr_set_error(err, err_size, "cannot read '%s': %s", path, msg);
         goto done;
     }
 
@@ -407,7 +403,7 @@ sluice_status sluice_image_read_ex(const char *path, unsigned flags, sluice_imag
     int use_lut = tf != TRANSFER_LINEAR && info.bits == 8;
     if (use_lut)
         for (int i = 0; i < 256; ++i)
-            lut[i] = tf == TRANSFER_SRGB ? sluice_srgb_decode((float)i / 255.0f)
+            lut[i] = tf == TRANSFER_SRGB ? sr_srgb_decode((float)i / 255.0f)
                                          : (float)pow(i / 255.0, info.gamma);
     float *px = img->pixels;
     for (size_t p = 0; p < npix; ++p) {
@@ -418,7 +414,7 @@ sluice_status sluice_image_read_ex(const char *path, unsigned flags, sluice_imag
             if (use_lut)
                 v = lut[(int)(clamp01(v) * 255.0 + 0.5)];
             else if (tf == TRANSFER_SRGB)
-                v = sluice_srgb_decode(v);
+                v = sr_srgb_decode(v);
             else if (tf == TRANSFER_GAMMA)
                 v = (float)pow(clamp01(v), info.gamma);
             d[k] = v;
@@ -429,16 +425,16 @@ sluice_status sluice_image_read_ex(const char *path, unsigned flags, sluice_imag
 
 done:
     free(buf);
-    sluice_image_io_close(r);
+    sr_image_io_close(r);
     if (st != SLUICE_OK) {
-        sluice_image_destroy(img);
+        sr_image_destroy(img);
         return st;
     }
     *out = img;
     return SLUICE_OK;
 }
 
-sluice_status sluice_image_read(const char *path, sluice_image **out, char *err, size_t err_size)
+sluice_status sr_image_read(const char *path, sr_image **out, char *err, size_t err_size)
 {
-    return sluice_image_read_ex(path, 0, out, err, err_size);
+    return sr_image_read_ex(path, 0, out, err, err_size);
 }

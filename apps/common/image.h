@@ -12,8 +12,8 @@
  * bytes into `err` (which may be NULL) and, when a file is involved, names
  * it.
  */
-#ifndef SLUICE_APPS_IMAGE_H
-#define SLUICE_APPS_IMAGE_H
+#ifndef SR_APPS_IMAGE_H
+#define SR_APPS_IMAGE_H
 
 #include "sluice/sluice.h"
 
@@ -23,43 +23,43 @@
 extern "C" {
 #endif
 
-/** Largest width or height sluice_image_create() accepts. */
-#define SLUICE_IMAGE_MAX_SIDE 65536u
-/** Largest width * height sluice_image_create() accepts (2^28 pixels, 4 GiB
+/** Largest width or height sr_image_create() accepts. */
+#define SR_IMAGE_MAX_SIDE 65536u
+/** Largest width * height sr_image_create() accepts (2^28 pixels, 4 GiB
  *  of RGBA floats): beyond it a request is a bug, not an image. */
-#define SLUICE_IMAGE_MAX_PIXELS (1u << 28)
+#define SR_IMAGE_MAX_PIXELS (1u << 28)
 
-typedef struct sluice_image sluice_image;
+typedef struct sr_image sr_image;
 
 /**
  * Creates a width x height image of `channels` (3: RGB, 4: RGBA) floats per
  * pixel, all zero. Fails with SLUICE_ERROR_INVALID_ARGUMENT for a zero size,
- * a side above SLUICE_IMAGE_MAX_SIDE, more than SLUICE_IMAGE_MAX_PIXELS pixels
+ * a side above SR_IMAGE_MAX_SIDE, more than SR_IMAGE_MAX_PIXELS pixels
  * or another channel count, before allocating anything, and with
  * SLUICE_ERROR_OUT_OF_MEMORY when the pixels cannot be allocated. On failure
  * `*out` is NULL.
  */
-sluice_status sluice_image_create(unsigned width, unsigned height, unsigned channels,
-                                  sluice_image **out, char *err, size_t err_size);
+sluice_status sr_image_create(unsigned width, unsigned height, unsigned channels, sr_image **out,
+                              char *err, size_t err_size);
 
 /** Frees the image and its pixels. NULL is allowed. */
-void sluice_image_destroy(sluice_image *img);
+void sr_image_destroy(sr_image *img);
 
 /** Width in pixels (0 for NULL). */
-unsigned sluice_image_width(const sluice_image *img);
+unsigned sr_image_width(const sr_image *img);
 
 /** Height in pixels (0 for NULL). */
-unsigned sluice_image_height(const sluice_image *img);
+unsigned sr_image_height(const sr_image *img);
 
 /** Floats per pixel: 3 or 4 (0 for NULL). */
-unsigned sluice_image_channels(const sluice_image *img);
+unsigned sr_image_channels(const sr_image *img);
 
 /** The pixels: width * height * channels floats, row-major, top row first;
  *  pixel (x, y) starts at index (y * width + x) * channels. NULL for NULL. */
-float *sluice_image_pixels(sluice_image *img);
+float *sr_image_pixels(sr_image *img);
 
-/** Read-only view of the same pixels as sluice_image_pixels(). */
-const float *sluice_image_pixels_const(const sluice_image *img);
+/** Read-only view of the same pixels as sr_image_pixels(). */
+const float *sr_image_pixels_const(const sr_image *img);
 
 /**
  * Writes the image to `path`, in the format its extension names (any case):
@@ -78,15 +78,14 @@ const float *sluice_image_pixels_const(const sluice_image *img);
  * (OpenImageIO, fsync or rename failed; a missing directory),
  * SLUICE_ERROR_OUT_OF_MEMORY.
  */
-sluice_status sluice_image_write(const sluice_image *img, const char *path, char *err,
-                                 size_t err_size);
+sluice_status sr_image_write(const sr_image *img, const char *path, char *err, size_t err_size);
 
-/** Flags of sluice_image_read_ex(). */
+/** Flags of sr_image_read_ex(). */
 enum {
     /** Skip the transfer function: integer files come back as their stored
      *  values scaled to [0, 1] (an 8-bit 128 reads 128/255). For data that
      *  is not colour (normal maps), and to inspect what a file holds. */
-    SLUICE_IMAGE_READ_RAW = 1u
+    SR_IMAGE_READ_RAW = 1u
 };
 
 /**
@@ -99,33 +98,33 @@ enum {
  * alpha become RGB and the alpha channel, if the file has one, A.
  * Errors: SLUICE_ERROR_NOT_FOUND (no such file), SLUICE_ERROR_IO (not
  * readable as an image; the message quotes OpenImageIO),
- * SLUICE_ERROR_INVALID_ARGUMENT (too large for sluice_image_create, a
+ * SLUICE_ERROR_INVALID_ARGUMENT (too large for sr_image_create, a
  * volume), SLUICE_ERROR_OUT_OF_MEMORY. On failure `*out` is NULL.
  */
-sluice_status sluice_image_read(const char *path, sluice_image **out, char *err, size_t err_size);
+sluice_status sr_image_read(const char *path, sr_image **out, char *err, size_t err_size);
 
-/** sluice_image_read() with flags (SLUICE_IMAGE_READ_RAW); flags 0 is the
- *  same as sluice_image_read(). */
-sluice_status sluice_image_read_ex(const char *path, unsigned flags, sluice_image **out, char *err,
-                                   size_t err_size);
+/** sr_image_read() with flags (SR_IMAGE_READ_RAW); flags 0 is the
+ *  same as sr_image_read(). */
+sluice_status sr_image_read_ex(const char *path, unsigned flags, sr_image **out, char *err,
+                               size_t err_size);
 
 /** The sRGB transfer function (IEC 61966-2-1): linear [0, 1] to encoded
  *  [0, 1]. Values outside [0, 1] are clamped and NaN gives 0. */
-float sluice_srgb_encode(float linear);
+float sr_srgb_encode(float linear);
 
-/** The inverse of sluice_srgb_encode(): encoded [0, 1] to linear [0, 1],
+/** The inverse of sr_srgb_encode(): encoded [0, 1] to linear [0, 1],
  *  clamped the same way. */
-float sluice_srgb_decode(float encoded);
+float sr_srgb_decode(float encoded);
 
 /* ------------------------------------------------------------------ */
 /* OpenImageIO shim (image_io.cpp). Used by image.c; other code should  */
-/* call sluice_image_read/write. These functions take no file-naming   */
+/* call sr_image_read/write. These functions take no file-naming   */
 /* responsibility: their messages are OpenImageIO's, and the callers    */
 /* above prefix the path.                                               */
 /* ------------------------------------------------------------------ */
 
-/** What sluice_image_io_open() learned about a file. */
-typedef struct sluice_image_io_info {
+/** What sr_image_io_open() learned about a file. */
+typedef struct sr_image_io_info {
     long long width, height, depth; /**< of the data window; depth 1 for 2D */
     int channels;                   /**< channels in the file */
     int alpha_channel;              /**< index of alpha, or -1 */
@@ -133,36 +132,36 @@ typedef struct sluice_image_io_info {
     int bits;                       /**< bits per stored channel value */
     float gamma;                    /**< the file's stated gamma, or 0 */
     char colorspace[64];            /**< "oiio:ColorSpace", or "" */
-} sluice_image_io_info;
+} sr_image_io_info;
 
-typedef struct sluice_image_io_reader sluice_image_io_reader;
+typedef struct sr_image_io_reader sr_image_io_reader;
 
 /** Opens `path` for reading and fills `*info`. Returns SLUICE_ERROR_IO with
  *  OpenImageIO's message when it cannot, SLUICE_ERROR_OUT_OF_MEMORY. */
-sluice_status sluice_image_io_open(const char *path, sluice_image_io_reader **out,
-                                   sluice_image_io_info *info, char *err, size_t err_size);
+sluice_status sr_image_io_open(const char *path, sr_image_io_reader **out, sr_image_io_info *info,
+                               char *err, size_t err_size);
 
 /** Reads channels [chbegin, chend) of every pixel of the open file as
  *  floats (integer formats scaled to [0, 1]) into `pixels`, which holds
  *  width * height * (chend - chbegin) floats. */
-sluice_status sluice_image_io_read(sluice_image_io_reader *r, int chbegin, int chend, float *pixels,
-                                   char *err, size_t err_size);
+sluice_status sr_image_io_read(sr_image_io_reader *r, int chbegin, int chend, float *pixels,
+                               char *err, size_t err_size);
 
-/** Closes a reader from sluice_image_io_open(); NULL is allowed. */
-void sluice_image_io_close(sluice_image_io_reader *r);
+/** Closes a reader from sr_image_io_open(); NULL is allowed. */
+void sr_image_io_close(sr_image_io_reader *r);
 
-/** Pixel types sluice_image_io_write() takes. */
-typedef enum sluice_image_io_type {
-    SLUICE_IMAGE_IO_FLOAT, /**< float, stored as 32-bit float where possible */
-    SLUICE_IMAGE_IO_UINT8  /**< uint8_t, stored as is, tagged sRGB */
-} sluice_image_io_type;
+/** Pixel types sr_image_io_write() takes. */
+typedef enum sr_image_io_type {
+    SR_IMAGE_IO_FLOAT, /**< float, stored as 32-bit float where possible */
+    SR_IMAGE_IO_UINT8  /**< uint8_t, stored as is, tagged sRGB */
+} sr_image_io_type;
 
 /** Writes width x height pixels of `channels` interleaved values of `type`
  *  to `path`, in the format OpenImageIO picks from its extension. Alpha,
  *  if any, is the fourth channel and is stored unassociated. */
-sluice_status sluice_image_io_write(const char *path, unsigned width, unsigned height,
-                                    unsigned channels, sluice_image_io_type type,
-                                    const void *pixels, char *err, size_t err_size);
+sluice_status sr_image_io_write(const char *path, unsigned width, unsigned height,
+                                unsigned channels, sr_image_io_type type, const void *pixels,
+                                char *err, size_t err_size);
 
 #ifdef __cplusplus
 }

@@ -14,7 +14,7 @@
 #include <new>
 #include <string>
 
-struct sluice_image_io_reader {
+struct sr_image_io_reader {
     std::unique_ptr<OIIO::ImageInput> in;
 };
 
@@ -25,13 +25,13 @@ static sluice_status caught(char *err, size_t err_size)
     try {
         throw;
     } catch (const std::bad_alloc &) {
-        sluice_set_error(err, err_size, "out of memory");
+        sr_set_error(err, err_size, "out of memory");
         return SLUICE_ERROR_OUT_OF_MEMORY;
     } catch (const std::exception &e) {
-        sluice_set_error(err, err_size, "OpenImageIO: %s", e.what());
+        sr_set_error(err, err_size, "OpenImageIO: %s", e.what());
         return SLUICE_ERROR_IO;
     } catch (...) {
-        sluice_set_error(err, err_size, "OpenImageIO raised an unknown exception");
+        sr_set_error(err, err_size, "OpenImageIO raised an unknown exception");
         return SLUICE_ERROR_IO;
     }
 }
@@ -47,14 +47,13 @@ static std::string one_line(std::string s, const char *fallback)
     return s.empty() ? std::string(fallback) : s;
 }
 
-extern "C" sluice_status sluice_image_io_open(const char *path, sluice_image_io_reader **out,
-                                              sluice_image_io_info *info, char *err,
-                                              size_t err_size)
+extern "C" sluice_status sr_image_io_open(const char *path, sr_image_io_reader **out,
+                                          sr_image_io_info *info, char *err, size_t err_size)
 {
     if (out)
         *out = nullptr;
     if (!path || !out || !info) {
-        sluice_set_error(err, err_size, "NULL argument");
+        sr_set_error(err, err_size, "NULL argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     try {
@@ -64,8 +63,8 @@ extern "C" sluice_status sluice_image_io_open(const char *path, sluice_image_io_
         config.attribute("oiio:UnassociatedAlpha", 1);
         auto in = OIIO::ImageInput::open(path, &config);
         if (!in) {
-            sluice_set_error(err, err_size, "%s",
-                             one_line(OIIO::geterror(), "OpenImageIO cannot open it").c_str());
+            sr_set_error(err, err_size, "%s",
+                         one_line(OIIO::geterror(), "OpenImageIO cannot open it").c_str());
             return SLUICE_ERROR_IO;
         }
         const OIIO::ImageSpec &spec = in->spec();
@@ -80,7 +79,7 @@ extern "C" sluice_status sluice_image_io_open(const char *path, sluice_image_io_
         info->gamma = spec.get_float_attribute("oiio:Gamma", 0.0f);
         std::string cs = spec.get_string_attribute("oiio:ColorSpace");
         std::snprintf(info->colorspace, sizeof info->colorspace, "%s", cs.c_str());
-        auto *r = new sluice_image_io_reader;
+        auto *r = new sr_image_io_reader;
         r->in = std::move(in);
         *out = r;
         return SLUICE_OK;
@@ -89,18 +88,17 @@ extern "C" sluice_status sluice_image_io_open(const char *path, sluice_image_io_
     }
 }
 
-extern "C" sluice_status sluice_image_io_read(sluice_image_io_reader *r, int chbegin, int chend,
-                                              float *pixels, char *err, size_t err_size)
+extern "C" sluice_status sr_image_io_read(sr_image_io_reader *r, int chbegin, int chend,
+                                          float *pixels, char *err, size_t err_size)
 {
     if (!r || !pixels || chbegin < 0 || chend <= chbegin || chend > r->in->spec().nchannels) {
-        sluice_set_error(err, err_size, "bad arguments to sluice_image_io_read");
+        sr_set_error(err, err_size, "bad arguments to sr_image_io_read");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     try {
         if (!r->in->read_image(0, 0, chbegin, chend, OIIO::TypeDesc::FLOAT, pixels)) {
-            sluice_set_error(
-                err, err_size, "%s",
-                one_line(r->in->geterror(), "OpenImageIO cannot read the pixels").c_str());
+            sr_set_error(err, err_size, "%s",
+                         one_line(r->in->geterror(), "OpenImageIO cannot read the pixels").c_str());
             return SLUICE_ERROR_IO;
         }
         return SLUICE_OK;
@@ -109,7 +107,7 @@ extern "C" sluice_status sluice_image_io_read(sluice_image_io_reader *r, int chb
     }
 }
 
-extern "C" void sluice_image_io_close(sluice_image_io_reader *r)
+extern "C" void sr_image_io_close(sr_image_io_reader *r)
 {
     if (!r)
         return;
@@ -122,36 +120,35 @@ extern "C" void sluice_image_io_close(sluice_image_io_reader *r)
     delete r;
 }
 
-extern "C" sluice_status sluice_image_io_write(const char *path, unsigned width, unsigned height,
-                                               unsigned channels, sluice_image_io_type type,
-                                               const void *pixels, char *err, size_t err_size)
+extern "C" sluice_status sr_image_io_write(const char *path, unsigned width, unsigned height,
+                                           unsigned channels, sr_image_io_type type,
+                                           const void *pixels, char *err, size_t err_size)
 {
     if (!path || !pixels || !width || !height || !channels || channels > 4 ||
-        width > SLUICE_IMAGE_MAX_SIDE || height > SLUICE_IMAGE_MAX_SIDE) {
-        sluice_set_error(err, err_size, "bad arguments to sluice_image_io_write");
+        width > SR_IMAGE_MAX_SIDE || height > SR_IMAGE_MAX_SIDE) {
+        sr_set_error(err, err_size, "bad arguments to sr_image_io_write");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     try {
         auto out = OIIO::ImageOutput::create(path);
         if (!out) {
-            sluice_set_error(
-                err, err_size, "%s",
-                one_line(OIIO::geterror(), "OpenImageIO has no writer for it").c_str());
+            sr_set_error(err, err_size, "%s",
+                         one_line(OIIO::geterror(), "OpenImageIO has no writer for it").c_str());
             return SLUICE_ERROR_IO;
         }
         OIIO::TypeDesc td =
-            type == SLUICE_IMAGE_IO_UINT8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT;
+            type == SR_IMAGE_IO_UINT8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT;
         /* The spec names the channels R, G, B, A and sets alpha_channel. */
         OIIO::ImageSpec spec((int)width, (int)height, (int)channels, td);
-        spec.attribute("oiio:ColorSpace", type == SLUICE_IMAGE_IO_UINT8 ? "sRGB" : "linear");
+        spec.attribute("oiio:ColorSpace", type == SR_IMAGE_IO_UINT8 ? "sRGB" : "linear");
         /* Our alpha is straight: stop writers from un-premultiplying it. */
         spec.attribute("oiio:UnassociatedAlpha", 1);
         bool ok = out->open(path, spec) && out->write_image(td, pixels);
         /* close() flushes: its failure (a full disk) is a failed write. */
         ok = out->close() && ok;
         if (!ok) {
-            sluice_set_error(err, err_size, "%s",
-                             one_line(out->geterror(), "OpenImageIO cannot write it").c_str());
+            sr_set_error(err, err_size, "%s",
+                         one_line(out->geterror(), "OpenImageIO cannot write it").c_str());
             return SLUICE_ERROR_IO;
         }
         return SLUICE_OK;

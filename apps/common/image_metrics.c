@@ -21,26 +21,26 @@ static int pixel_class(const float *p, unsigned channels)
     return cls;
 }
 
-sluice_status sluice_image_compare(const sluice_image *a, const sluice_image *b,
-                                   sluice_image_metrics *m, char *err, size_t err_size)
+sluice_status sr_image_compare(const sr_image *a, const sr_image *b, sr_image_metrics *m, char *err,
+                               size_t err_size)
 {
     if (m)
         memset(m, 0, sizeof *m);
     if (!a || !b || !m) {
-        sluice_set_error(err, err_size, "sluice_image_compare: NULL argument");
+        sr_set_error(err, err_size, "sr_image_compare: NULL argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
-    unsigned w = sluice_image_width(a), h = sluice_image_height(a);
-    if (w != sluice_image_width(b) || h != sluice_image_height(b)) {
-        sluice_set_error(err, err_size, "image sizes differ: %ux%u vs %ux%u", w, h,
-                         sluice_image_width(b), sluice_image_height(b));
+    unsigned w = sr_image_width(a), h = sr_image_height(a);
+    if (w != sr_image_width(b) || h != sr_image_height(b)) {
+        sr_set_error(err, err_size, "image sizes differ: %ux%u vs %ux%u", w, h, sr_image_width(b),
+                     sr_image_height(b));
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
-    unsigned ca = sluice_image_channels(a), cb = sluice_image_channels(b);
+    unsigned ca = sr_image_channels(a), cb = sr_image_channels(b);
     unsigned nc = ca < cb ? ca : cb;
     if (nc > 3)
         nc = 3;
-    const float *pa = sluice_image_pixels_const(a), *pb = sluice_image_pixels_const(b);
+    const float *pa = sr_image_pixels_const(a), *pb = sr_image_pixels_const(b);
     const size_t npix = (size_t)w * h;
 
     double sum_sq = 0.0, sum_rel = 0.0, max_err = 0.0;
@@ -63,7 +63,7 @@ sluice_status sluice_image_compare(const sluice_image *a, const sluice_image *b,
             double d = (double)x[k] - (double)y[k];
             double ref = y[k];
             sum_sq += d * d;
-            sum_rel += d * d / (ref * ref + SLUICE_IMAGE_REL_MSE_EPSILON);
+            sum_rel += d * d / (ref * ref + SR_IMAGE_REL_MSE_EPSILON);
             if (fabs(d) > max_err)
                 max_err = fabs(d);
         }

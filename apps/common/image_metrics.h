@@ -6,7 +6,7 @@
  * pixels and the compared channels, N = valid pixels * channels):
  *   rmse       sqrt( sum (a - b)^2 / N )
  *   rel_mse    sum ( (a - b)^2 / (b^2 + 0.01) ) / N
- *              The 0.01 (SLUICE_IMAGE_REL_MSE_EPSILON) keeps dark reference
+ *              The 0.01 (SR_IMAGE_REL_MSE_EPSILON) keeps dark reference
  *              values from dominating: below b = 0.1 the error counts
  *              roughly as absolute, above it as relative.
  *   psnr       20 log10(1 / rmse) dB, with a peak of 1.0 (linear white).
@@ -22,8 +22,8 @@
  * treat nan_count or inf_count > 0 as a failure. When no pixel is valid,
  * rmse, rel_mse and max_error are 0 and psnr is +infinity.
  */
-#ifndef SLUICE_APPS_IMAGE_METRICS_H
-#define SLUICE_APPS_IMAGE_METRICS_H
+#ifndef SR_APPS_IMAGE_METRICS_H
+#define SR_APPS_IMAGE_METRICS_H
 
 #include "image.h"
 
@@ -32,10 +32,10 @@ extern "C" {
 #endif
 
 /** The epsilon in the denominator of rel_mse. */
-#define SLUICE_IMAGE_REL_MSE_EPSILON 1e-2
+#define SR_IMAGE_REL_MSE_EPSILON 1e-2
 
-/** What sluice_image_compare() measures; see the definitions above. */
-typedef struct sluice_image_metrics {
+/** What sr_image_compare() measures; see the definitions above. */
+typedef struct sr_image_metrics {
     double rmse;       /**< root mean square error */
     double rel_mse;    /**< relative mean square error */
     double psnr;       /**< peak signal-to-noise ratio in dB, peak 1.0 */
@@ -44,15 +44,15 @@ typedef struct sluice_image_metrics {
     size_t inf_count;  /**< pixels with an Inf (and no NaN) in either image */
     size_t pixels;     /**< all pixels of one image (width * height) */
     unsigned channels; /**< channels compared per pixel (3) */
-} sluice_image_metrics;
+} sr_image_metrics;
 
 /**
  * Compares image `a` with the reference `b` and fills `*m`. Fails with
  * SLUICE_ERROR_INVALID_ARGUMENT for NULL arguments or images of different
  * sizes (the message gives both sizes); `*m` is then zeroed.
  */
-sluice_status sluice_image_compare(const sluice_image *a, const sluice_image *b,
-                                   sluice_image_metrics *m, char *err, size_t err_size);
+sluice_status sr_image_compare(const sr_image *a, const sr_image *b, sr_image_metrics *m, char *err,
+                               size_t err_size);
 
 #ifdef __cplusplus
 }

@@ -27,44 +27,44 @@
 
 static const double PI = 3.14159265358979323846;
 
-struct sluice_scene_builder {
+struct sr_scene_builder {
     char *source;
     float *positions, *normals;                    /* normals: NULL until a mesh has them */
     size_t vertex_count, position_cap, normal_cap; /* capacities in floats */
     uint32_t *indices, *tri_materials;
     size_t triangle_count, index_cap, tri_material_cap; /* capacities in uint32 */
-    sluice_material *materials;
+    sr_material *materials;
     size_t material_count, material_cap;
-    sluice_point_light *lights;
+    sr_point_light *lights;
     size_t light_count, light_cap;
-    sluice_camera camera;
+    sr_camera camera;
     int has_camera;
-    sluice_render_settings render;
+    sr_render_settings render;
     size_t degenerate;
     char *warnings; /* newline-separated */
     size_t warnings_len, warning_count;
-    sluice_scene_warning_fn warn_fn;
+    sr_scene_warning_fn warn_fn;
     void *warn_user;
     int finished;
 };
 
-struct sluice_scene {
+struct sr_scene {
     char *source;
     float *positions, *normals;
     size_t vertex_count;
     uint32_t *indices, *tri_materials;
     size_t triangle_count;
-    sluice_material *materials;
+    sr_material *materials;
     size_t material_count;
-    sluice_point_light *lights;
+    sr_point_light *lights;
     size_t light_count;
     uint32_t *emissive;
     float *emissive_area, *emissive_cdf;
     size_t emissive_count;
     double emissive_total_area, emissive_power[3];
-    sluice_camera camera;
-    sluice_render_settings render;
-    sluice_scene_stats stats;
+    sr_camera camera;
+    sr_render_settings render;
+    sr_scene_stats stats;
     char *warnings;
 };
 
@@ -105,21 +105,21 @@ static int reserve(void **p, size_t *cap, size_t need, size_t size)
 /* Materials, modes, settings                                          */
 /* ------------------------------------------------------------------ */
 
-static const char *const kind_names[SLUICE_MATERIAL_KIND_COUNT] = {"diffuse", "mirror", "glass",
-                                                                   "glossy", "emissive"};
+static const char *const kind_names[SR_MATERIAL_KIND_COUNT] = {"diffuse", "mirror", "glass",
+                                                               "glossy", "emissive"};
 
-const char *sluice_material_kind_name(sluice_material_kind kind)
+const char *sr_material_kind_name(sr_material_kind kind)
 {
-    return (unsigned)kind < SLUICE_MATERIAL_KIND_COUNT ? kind_names[kind] : "?";
+    return (unsigned)kind < SR_MATERIAL_KIND_COUNT ? kind_names[kind] : "?";
 }
 
-sluice_status sluice_material_kind_parse(const char *name, sluice_material_kind *kind)
+sluice_status sr_material_kind_parse(const char *name, sr_material_kind *kind)
 {
     if (!name || !kind)
         return SLUICE_ERROR_INVALID_ARGUMENT;
-    for (int k = 0; k < SLUICE_MATERIAL_KIND_COUNT; ++k) {
+    for (int k = 0; k < SR_MATERIAL_KIND_COUNT; ++k) {
         if (strcmp(name, kind_names[k]) == 0) {
-            *kind = (sluice_material_kind)k;
+            *kind = (sr_material_kind)k;
             return SLUICE_OK;
         }
     }
@@ -133,9 +133,9 @@ static void set3(float *d, float x, float y, float z)
     d[2] = z;
 }
 
-sluice_material sluice_material_make(sluice_material_kind kind, const char *name)
+sr_material sr_material_make(sr_material_kind kind, const char *name)
 {
-    sluice_material m;
+    sr_material m;
     memset(&m, 0, sizeof m);
     m.kind = kind;
     set3(m.albedo, 0.8f, 0.8f, 0.8f);
@@ -143,15 +143,15 @@ sluice_material sluice_material_make(sluice_material_kind kind, const char *name
     m.exponent = 50.0f;
     m.ior = 1.5f;
     switch (kind) {
-    case SLUICE_MATERIAL_MIRROR:
-    case SLUICE_MATERIAL_GLASS:
+    case SR_MATERIAL_MIRROR:
+    case SR_MATERIAL_GLASS:
         set3(m.specular, 1.0f, 1.0f, 1.0f);
         break;
-    case SLUICE_MATERIAL_GLOSSY:
+    case SR_MATERIAL_GLOSSY:
         set3(m.albedo, 0.6f, 0.6f, 0.6f);
         set3(m.specular, 0.2f, 0.2f, 0.2f);
         break;
-    case SLUICE_MATERIAL_EMISSIVE:
+    case SR_MATERIAL_EMISSIVE:
         set3(m.albedo, 0.0f, 0.0f, 0.0f);
         set3(m.emission, 1.0f, 1.0f, 1.0f);
         break;
@@ -163,7 +163,7 @@ sluice_material sluice_material_make(sluice_material_kind kind, const char *name
     return m;
 }
 
-int sluice_material_is_emissive(const sluice_material *m)
+int sr_material_is_emissive(const sr_material *m)
 {
     return m && (m->emission[0] > 0.0f || m->emission[1] > 0.0f || m->emission[2] > 0.0f);
 }
@@ -171,32 +171,32 @@ int sluice_material_is_emissive(const sluice_material *m)
 static const char *const mode_names[] = {"auto", "cast", "shadow", "whitted", "path", "photon"};
 #define MODE_COUNT (sizeof mode_names / sizeof mode_names[0])
 
-const char *sluice_render_mode_name(sluice_render_mode mode)
+const char *sr_render_mode_name(sr_render_mode mode)
 {
     return (unsigned)mode < MODE_COUNT ? mode_names[mode] : "?";
 }
 
-sluice_status sluice_render_mode_parse(const char *name, sluice_render_mode *mode)
+sluice_status sr_render_mode_parse(const char *name, sr_render_mode *mode)
 {
     if (!name || !mode)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     for (size_t k = 0; k < MODE_COUNT; ++k) {
         if (strcmp(name, mode_names[k]) == 0) {
-            *mode = (sluice_render_mode)k;
+            *mode = (sr_render_mode)k;
             return SLUICE_OK;
         }
     }
     return SLUICE_ERROR_NOT_FOUND;
 }
 
-sluice_render_settings sluice_render_settings_default(void)
+sr_render_settings sr_render_settings_default(void)
 {
-    sluice_render_settings r;
+    sr_render_settings r;
     memset(&r, 0, sizeof r);
     r.samples_per_pixel = 1;
     r.max_depth = 5;
     r.light_samples = 1;
-    r.mode = SLUICE_RENDER_AUTO;
+    r.mode = SR_RENDER_AUTO;
     return r;
 }
 
@@ -204,12 +204,12 @@ sluice_render_settings sluice_render_settings_default(void)
 /* Builder                                                             */
 /* ------------------------------------------------------------------ */
 
-sluice_status sluice_scene_builder_create(const char *source, sluice_scene_builder **out)
+sluice_status sr_scene_builder_create(const char *source, sr_scene_builder **out)
 {
     if (!out)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     *out = NULL;
-    sluice_scene_builder *b = calloc(1, sizeof *b);
+    sr_scene_builder *b = calloc(1, sizeof *b);
     if (!b)
         return SLUICE_ERROR_OUT_OF_MEMORY;
     b->source = dup_str(source ? source : "scene");
@@ -217,12 +217,12 @@ sluice_status sluice_scene_builder_create(const char *source, sluice_scene_build
         free(b);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
-    b->render = sluice_render_settings_default();
+    b->render = sr_render_settings_default();
     *out = b;
     return SLUICE_OK;
 }
 
-void sluice_scene_builder_destroy(sluice_scene_builder *b)
+void sr_scene_builder_destroy(sr_scene_builder *b)
 {
     if (!b)
         return;
@@ -237,8 +237,7 @@ void sluice_scene_builder_destroy(sluice_scene_builder *b)
     free(b);
 }
 
-void sluice_scene_builder_set_warning_callback(sluice_scene_builder *b, sluice_scene_warning_fn fn,
-                                               void *user)
+void sr_scene_builder_set_warning_callback(sr_scene_builder *b, sr_scene_warning_fn fn, void *user)
 {
     if (!b)
         return;
@@ -248,7 +247,7 @@ void sluice_scene_builder_set_warning_callback(sluice_scene_builder *b, sluice_s
 
 /* Appends a line to the kept warnings; silently keeps fewer lines when memory
  * is short (a warning must never fail the build). */
-static void keep_warning(sluice_scene_builder *b, const char *msg)
+static void keep_warning(sr_scene_builder *b, const char *msg)
 {
     size_t n = strlen(msg);
     char *w = realloc(b->warnings, b->warnings_len + n + 2);
@@ -261,7 +260,7 @@ static void keep_warning(sluice_scene_builder *b, const char *msg)
     b->warnings_len += n + 1;
 }
 
-void sluice_scene_builder_warn(sluice_scene_builder *b, const char *fmt, ...)
+void sr_scene_builder_warn(sr_scene_builder *b, const char *fmt, ...)
 {
     if (!b || !fmt)
         return;
@@ -288,68 +287,66 @@ static int nonneg3(const float *v)
 }
 
 /* Checks one colour field of a material: finite and not negative. */
-static int check_color(const sluice_scene_builder *b, const sluice_material *m, const char *field,
+static int check_color(const sr_scene_builder *b, const sr_material *m, const char *field,
                        const float *v, char *err, size_t err_size)
 {
     if (!finite3(v) || !nonneg3(v)) {
-        sluice_set_error(err, err_size,
-                         "%s: material '%s': %s (%g, %g, %g) must be finite and >= 0", b->source,
-                         m->name, field, v[0], v[1], v[2]);
+        sr_set_error(err, err_size, "%s: material '%s': %s (%g, %g, %g) must be finite and >= 0",
+                     b->source, m->name, field, v[0], v[1], v[2]);
         return 0;
     }
     return 1;
 }
 
-sluice_status sluice_scene_builder_add_material(sluice_scene_builder *b, const sluice_material *m,
-                                                uint32_t *index, char *err, size_t err_size)
+sluice_status sr_scene_builder_add_material(sr_scene_builder *b, const sr_material *m,
+                                            uint32_t *index, char *err, size_t err_size)
 {
     if (!b || !m || b->finished) {
-        sluice_set_error(err, err_size, "add_material: invalid argument");
+        sr_set_error(err, err_size, "add_material: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
-    if ((unsigned)m->kind >= SLUICE_MATERIAL_KIND_COUNT) {
-        sluice_set_error(err, err_size, "%s: material '%.*s': unknown kind %d", b->source,
-                         SLUICE_MATERIAL_NAME_SIZE, m->name, (int)m->kind);
+    if ((unsigned)m->kind >= SR_MATERIAL_KIND_COUNT) {
+        sr_set_error(err, err_size, "%s: material '%.*s': unknown kind %d", b->source,
+                     SR_MATERIAL_NAME_SIZE, m->name, (int)m->kind);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
-    sluice_material c = *m;
-    c.name[SLUICE_MATERIAL_NAME_SIZE - 1] = '\0';
+    sr_material c = *m;
+    c.name[SR_MATERIAL_NAME_SIZE - 1] = '\0';
     if (!check_color(b, &c, "albedo", c.albedo, err, err_size) ||
         !check_color(b, &c, "specular", c.specular, err, err_size) ||
         !check_color(b, &c, "emission", c.emission, err, err_size))
         return SLUICE_ERROR_INVALID_ARGUMENT;
     if (!isfinite(c.exponent) || c.exponent < 0.0f) {
-        sluice_set_error(err, err_size, "%s: material '%s': exponent %g must be finite and >= 0",
-                         b->source, c.name, c.exponent);
+        sr_set_error(err, err_size, "%s: material '%s': exponent %g must be finite and >= 0",
+                     b->source, c.name, c.exponent);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (!isfinite(c.ior) || c.ior <= 0.0f) {
-        sluice_set_error(err, err_size, "%s: material '%s': ior %g must be finite and > 0",
-                         b->source, c.name, c.ior);
+        sr_set_error(err, err_size, "%s: material '%s': ior %g must be finite and > 0", b->source,
+                     c.name, c.ior);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
-    if (c.kind == SLUICE_MATERIAL_EMISSIVE && !sluice_material_is_emissive(&c)) {
-        sluice_set_error(err, err_size,
-                         "%s: material '%s': kind emissive needs a non-zero emission", b->source,
-                         c.name);
+    if (c.kind == SR_MATERIAL_EMISSIVE && !sr_material_is_emissive(&c)) {
+        sr_set_error(err, err_size, "%s: material '%s': kind emissive needs a non-zero emission",
+                     b->source, c.name);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (b->material_count >= MAX_ELEMENTS) {
-        sluice_set_error(err, err_size, "%s: too many materials", b->source);
+        sr_set_error(err, err_size, "%s: too many materials", b->source);
         return SLUICE_ERROR_LIMIT;
     }
     if (!reserve((void **)&b->materials, &b->material_cap, b->material_count + 1,
                  sizeof *b->materials)) {
-        sluice_set_error(err, err_size, "%s: out of memory", b->source);
+        sr_set_error(err, err_size, "%s: out of memory", b->source);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
-    if (c.kind == SLUICE_MATERIAL_GLOSSY) {
+    if (c.kind == SR_MATERIAL_GLOSSY) {
         for (int k = 0; k < 3; ++k) {
             if (c.albedo[k] + c.specular[k] > 1.0f) {
-                sluice_scene_builder_warn(b,
-                                          "%s: material '%s': glossy kd + ks = %g > 1 in channel "
-                                          "%d: not energy conserving (Jakob 2.4.1)",
-                                          b->source, c.name, c.albedo[k] + c.specular[k], k);
+                sr_scene_builder_warn(b,
+                                      "%s: material '%s': glossy kd + ks = %g > 1 in channel "
+                                      "%d: not energy conserving (Jakob 2.4.1)",
+                                      b->source, c.name, c.albedo[k] + c.specular[k], k);
                 break;
             }
         }
@@ -361,8 +358,8 @@ sluice_status sluice_scene_builder_add_material(sluice_scene_builder *b, const s
     return SLUICE_OK;
 }
 
-sluice_status sluice_scene_builder_find_material(const sluice_scene_builder *b, const char *name,
-                                                 uint32_t *index)
+sluice_status sr_scene_builder_find_material(const sr_scene_builder *b, const char *name,
+                                             uint32_t *index)
 {
     if (!b || !name)
         return SLUICE_ERROR_INVALID_ARGUMENT;
@@ -376,12 +373,12 @@ sluice_status sluice_scene_builder_find_material(const sluice_scene_builder *b, 
     return SLUICE_ERROR_NOT_FOUND;
 }
 
-size_t sluice_scene_builder_material_count(const sluice_scene_builder *b)
+size_t sr_scene_builder_material_count(const sr_scene_builder *b)
 {
     return b ? b->material_count : 0;
 }
 
-size_t sluice_scene_builder_triangle_count(const sluice_scene_builder *b)
+size_t sr_scene_builder_triangle_count(const sr_scene_builder *b)
 {
     return b ? b->triangle_count : 0;
 }
@@ -393,7 +390,7 @@ typedef struct xform {
     int identity;
 } xform;
 
-static sluice_status make_xform(const sluice_scene_builder *b, const char *src, const float *m,
+static sluice_status make_xform(const sr_scene_builder *b, const char *src, const float *m,
                                 xform *x, char *err, size_t err_size)
 {
     memset(x, 0, sizeof *x);
@@ -406,15 +403,14 @@ static sluice_status make_xform(const sluice_scene_builder *b, const char *src, 
     }
     for (int i = 0; i < 16; ++i) {
         if (!isfinite(m[i])) {
-            sluice_set_error(err, err_size, "%s: %s: transform element %d is not finite", b->source,
-                             src, i);
+            sr_set_error(err, err_size, "%s: %s: transform element %d is not finite", b->source,
+                         src, i);
             return SLUICE_ERROR_INVALID_ARGUMENT;
         }
     }
     if (m[12] != 0.0f || m[13] != 0.0f || m[14] != 0.0f || m[15] != 1.0f) {
-        sluice_set_error(err, err_size,
-                         "%s: %s: transform is not affine (last row must be 0 0 0 1)", b->source,
-                         src);
+        sr_set_error(err, err_size, "%s: %s: transform is not affine (last row must be 0 0 0 1)",
+                     b->source, src);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     double norm = 0.0;
@@ -434,8 +430,8 @@ static sluice_status make_xform(const sluice_scene_builder *b, const char *src, 
     }
     x->det = a[0][0] * x->cof[0][0] + a[0][1] * x->cof[0][1] + a[0][2] * x->cof[0][2];
     if (!(fabs(x->det) > 1e-12 * norm * norm * norm)) {
-        sluice_set_error(err, err_size, "%s: %s: transform is singular (determinant %g)", b->source,
-                         src, x->det);
+        sr_set_error(err, err_size, "%s: %s: transform is singular (determinant %g)", b->source,
+                     src, x->det);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     return SLUICE_OK;
@@ -467,20 +463,20 @@ static int is_degenerate(const float *p0, const float *p1, const float *p2)
     return !(c > DEGENERATE_REL * l);
 }
 
-sluice_status sluice_scene_builder_add_mesh(sluice_scene_builder *b, const sluice_mesh_desc *mesh,
-                                            char *err, size_t err_size)
+sluice_status sr_scene_builder_add_mesh(sr_scene_builder *b, const sr_mesh_desc *mesh, char *err,
+                                        size_t err_size)
 {
     if (!b || !mesh || b->finished || (mesh->vertex_count && !mesh->positions) ||
         (mesh->triangle_count && !mesh->indices)) {
-        sluice_set_error(err, err_size, "add_mesh: invalid argument");
+        sr_set_error(err, err_size, "add_mesh: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     const char *src = src_name(mesh->source);
     size_t nv = mesh->vertex_count, nt = mesh->triangle_count;
     if (nv > MAX_ELEMENTS || nt > MAX_ELEMENTS || b->vertex_count + nv > MAX_ELEMENTS ||
         b->triangle_count + nt > MAX_ELEMENTS) {
-        sluice_set_error(err, err_size, "%s: %s: the scene would exceed %zu vertices or triangles",
-                         b->source, src, MAX_ELEMENTS);
+        sr_set_error(err, err_size, "%s: %s: the scene would exceed %zu vertices or triangles",
+                     b->source, src, MAX_ELEMENTS);
         return SLUICE_ERROR_LIMIT;
     }
     /* 1. inputs: finite positions and normals, indices and materials in range */
@@ -488,30 +484,30 @@ sluice_status sluice_scene_builder_add_mesh(sluice_scene_builder *b, const sluic
         const float *p = mesh->positions + 3 * i;
         for (int k = 0; k < 3; ++k) {
             if (!isfinite(p[k])) {
-                sluice_set_error(err, err_size, "%s: vertex %zu: coordinate %c is %s (%g, %g, %g)",
-                                 src, i, "xyz"[k], nonfinite_name(p[k]), p[0], p[1], p[2]);
+                sr_set_error(err, err_size, "%s: vertex %zu: coordinate %c is %s (%g, %g, %g)", src,
+                             i, "xyz"[k], nonfinite_name(p[k]), p[0], p[1], p[2]);
                 return SLUICE_ERROR_INVALID_ARGUMENT;
             }
         }
         if (mesh->normals && !finite3(mesh->normals + 3 * i)) {
-            sluice_set_error(err, err_size, "%s: vertex %zu: normal is not finite", src, i);
+            sr_set_error(err, err_size, "%s: vertex %zu: normal is not finite", src, i);
             return SLUICE_ERROR_INVALID_ARGUMENT;
         }
     }
     for (size_t t = 0; t < nt; ++t) {
         for (int k = 0; k < 3; ++k) {
             if (mesh->indices[3 * t + k] >= nv) {
-                sluice_set_error(err, err_size,
-                                 "%s: triangle %zu: vertex index %u out of range (%zu vertices)",
-                                 src, t, mesh->indices[3 * t + k], nv);
+                sr_set_error(err, err_size,
+                             "%s: triangle %zu: vertex index %u out of range (%zu vertices)", src,
+                             t, mesh->indices[3 * t + k], nv);
                 return SLUICE_ERROR_INVALID_ARGUMENT;
             }
         }
         uint32_t mat = mesh->materials ? mesh->materials[t] : mesh->material;
         if (mat >= b->material_count) {
-            sluice_set_error(err, err_size,
-                             "%s: triangle %zu: material %u out of range (%zu materials)", src, t,
-                             mat, b->material_count);
+            sr_set_error(err, err_size,
+                         "%s: triangle %zu: material %u out of range (%zu materials)", src, t, mat,
+                         b->material_count);
             return SLUICE_ERROR_INVALID_ARGUMENT;
         }
     }
@@ -530,7 +526,7 @@ sluice_status sluice_scene_builder_add_mesh(sluice_scene_builder *b, const sluic
         free(remap);
         free(keep);
         free(tp);
-        sluice_set_error(err, err_size, "%s: %s: out of memory", b->source, src);
+        sr_set_error(err, err_size, "%s: %s: out of memory", b->source, src);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     const float *pos = mesh->positions;
@@ -545,8 +541,8 @@ sluice_status sluice_scene_builder_add_mesh(sluice_scene_builder *b, const sluic
                 tp[3 * i + r] = ok ? (float)v : 0.0f;
             }
             if (!ok) {
-                sluice_set_error(err, err_size,
-                                 "%s: vertex %zu: transformed position overflows a float", src, i);
+                sr_set_error(err, err_size,
+                             "%s: vertex %zu: transformed position overflows a float", src, i);
                 free(remap);
                 free(keep);
                 free(tp);
@@ -591,7 +587,7 @@ sluice_status sluice_scene_builder_add_mesh(sluice_scene_builder *b, const sluic
         free(remap);
         free(keep);
         free(tp);
-        sluice_set_error(err, err_size, "%s: %s: out of memory", b->source, src);
+        sr_set_error(err, err_size, "%s: %s: out of memory", b->source, src);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     for (size_t i = 0; i < nv; ++i) {
@@ -636,63 +632,60 @@ sluice_status sluice_scene_builder_add_mesh(sluice_scene_builder *b, const sluic
     free(tp);
     if (dropped) {
         b->degenerate += dropped;
-        sluice_scene_builder_warn(b,
-                                  "%s: dropped %zu degenerate (zero-area) triangle%s of %zu "
-                                  "(first: triangle %zu)",
-                                  src, dropped, dropped == 1 ? "" : "s", nt, first_bad);
+        sr_scene_builder_warn(b,
+                              "%s: dropped %zu degenerate (zero-area) triangle%s of %zu "
+                              "(first: triangle %zu)",
+                              src, dropped, dropped == 1 ? "" : "s", nt, first_bad);
     }
     return SLUICE_OK;
 }
 
-sluice_status sluice_scene_builder_add_point_light(sluice_scene_builder *b,
-                                                   const sluice_point_light *light, char *err,
-                                                   size_t err_size)
+sluice_status sr_scene_builder_add_point_light(sr_scene_builder *b, const sr_point_light *light,
+                                               char *err, size_t err_size)
 {
     if (!b || !light || b->finished) {
-        sluice_set_error(err, err_size, "add_point_light: invalid argument");
+        sr_set_error(err, err_size, "add_point_light: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (!finite3(light->position)) {
-        sluice_set_error(err, err_size, "%s: point light %zu: position is not finite", b->source,
-                         b->light_count);
+        sr_set_error(err, err_size, "%s: point light %zu: position is not finite", b->source,
+                     b->light_count);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (!finite3(light->intensity) || !nonneg3(light->intensity)) {
-        sluice_set_error(err, err_size, "%s: point light %zu: intensity must be finite and >= 0",
-                         b->source, b->light_count);
+        sr_set_error(err, err_size, "%s: point light %zu: intensity must be finite and >= 0",
+                     b->source, b->light_count);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (!reserve((void **)&b->lights, &b->light_cap, b->light_count + 1, sizeof *b->lights)) {
-        sluice_set_error(err, err_size, "%s: out of memory", b->source);
+        sr_set_error(err, err_size, "%s: out of memory", b->source);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     b->lights[b->light_count++] = *light;
     return SLUICE_OK;
 }
 
-sluice_status sluice_scene_builder_set_camera(sluice_scene_builder *b, const sluice_camera *c,
-                                              char *err, size_t err_size)
+sluice_status sr_scene_builder_set_camera(sr_scene_builder *b, const sr_camera *c, char *err,
+                                          size_t err_size)
 {
     if (!b || !c || b->finished) {
-        sluice_set_error(err, err_size, "set_camera: invalid argument");
+        sr_set_error(err, err_size, "set_camera: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
-    if (c->width == 0 || c->height == 0 || c->width > SLUICE_SCENE_MAX_IMAGE_SIDE ||
-        c->height > SLUICE_SCENE_MAX_IMAGE_SIDE) {
-        sluice_set_error(err, err_size,
-                         "%s: camera: image size %ux%u is out of range (1..%u per side)", b->source,
-                         c->width, c->height, SLUICE_SCENE_MAX_IMAGE_SIDE);
+    if (c->width == 0 || c->height == 0 || c->width > SR_SCENE_MAX_IMAGE_SIDE ||
+        c->height > SR_SCENE_MAX_IMAGE_SIDE) {
+        sr_set_error(err, err_size, "%s: camera: image size %ux%u is out of range (1..%u per side)",
+                     b->source, c->width, c->height, SR_SCENE_MAX_IMAGE_SIDE);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (!finite3(c->eye) || !finite3(c->look_at) || !finite3(c->up)) {
-        sluice_set_error(err, err_size, "%s: camera: eye, look_at and up must be finite",
-                         b->source);
+        sr_set_error(err, err_size, "%s: camera: eye, look_at and up must be finite", b->source);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (!(c->vfov > 0.0f && c->vfov < 180.0f)) {
-        sluice_set_error(err, err_size,
-                         "%s: camera: vfov %g is out of range (0..180 degrees, exclusive)",
-                         b->source, c->vfov);
+        sr_set_error(err, err_size,
+                     "%s: camera: vfov %g is out of range (0..180 degrees, exclusive)", b->source,
+                     c->vfov);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     double d[3], u[3];
@@ -703,15 +696,14 @@ sluice_status sluice_scene_builder_set_camera(sluice_scene_builder *b, const slu
     double dl = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
     if (!(dl > 0.0)) {
-        sluice_set_error(err, err_size, "%s: camera: eye and look_at are the same point",
-                         b->source);
+        sr_set_error(err, err_size, "%s: camera: eye and look_at are the same point", b->source);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     double cx = d[1] * u[2] - d[2] * u[1], cy = d[2] * u[0] - d[0] * u[2],
            cz = d[0] * u[1] - d[1] * u[0];
     if (!(ul > 0.0) || !(sqrt(cx * cx + cy * cy + cz * cz) > 1e-6 * dl * ul)) {
-        sluice_set_error(err, err_size, "%s: camera: up is zero or parallel to the view direction",
-                         b->source);
+        sr_set_error(err, err_size, "%s: camera: up is zero or parallel to the view direction",
+                     b->source);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     b->camera = *c;
@@ -719,21 +711,20 @@ sluice_status sluice_scene_builder_set_camera(sluice_scene_builder *b, const slu
     return SLUICE_OK;
 }
 
-sluice_status sluice_scene_builder_set_render_settings(sluice_scene_builder *b,
-                                                       const sluice_render_settings *s, char *err,
-                                                       size_t err_size)
+sluice_status sr_scene_builder_set_render_settings(sr_scene_builder *b, const sr_render_settings *s,
+                                                   char *err, size_t err_size)
 {
     if (!b || !s || b->finished) {
-        sluice_set_error(err, err_size, "set_render_settings: invalid argument");
+        sr_set_error(err, err_size, "set_render_settings: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (s->samples_per_pixel == 0 || s->light_samples == 0) {
-        sluice_set_error(err, err_size,
-                         "%s: render: samples_per_pixel and light_samples must be >= 1", b->source);
+        sr_set_error(err, err_size, "%s: render: samples_per_pixel and light_samples must be >= 1",
+                     b->source);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if ((unsigned)s->mode >= MODE_COUNT) {
-        sluice_set_error(err, err_size, "%s: render: unknown mode %d", b->source, (int)s->mode);
+        sr_set_error(err, err_size, "%s: render: unknown mode %d", b->source, (int)s->mode);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     b->render = *s;
@@ -766,39 +757,39 @@ static void unit(double *v)
         v[k] /= l;
 }
 
-sluice_status sluice_scene_builder_finish(sluice_scene_builder *b, unsigned flags,
-                                          sluice_scene **out, char *err, size_t err_size)
+sluice_status sr_scene_builder_finish(sr_scene_builder *b, unsigned flags, sr_scene **out,
+                                      char *err, size_t err_size)
 {
     if (!out) {
-        sluice_set_error(err, err_size, "finish: invalid argument");
+        sr_set_error(err, err_size, "finish: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     *out = NULL;
     if (!b || b->finished) {
-        sluice_set_error(err, err_size, "finish: invalid argument");
+        sr_set_error(err, err_size, "finish: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (b->triangle_count == 0) {
-        sluice_set_error(err, err_size, "%s: the scene is empty (no triangles%s)", b->source,
-                         b->degenerate ? " left after dropping degenerate ones" : "");
+        sr_set_error(err, err_size, "%s: the scene is empty (no triangles%s)", b->source,
+                     b->degenerate ? " left after dropping degenerate ones" : "");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     /* Emissive triangles, counted first: whether a default light is needed
      * depends on them. */
     size_t ne = 0;
     for (size_t t = 0; t < b->triangle_count; ++t)
-        ne += sluice_material_is_emissive(&b->materials[b->tri_materials[t]]) != 0;
-    int add_light = b->light_count == 0 && ne == 0 && (flags & SLUICE_SCENE_DEFAULT_LIGHT);
-    if (b->light_count == 0 && ne == 0 && !add_light && !(flags & SLUICE_SCENE_ALLOW_NO_LIGHT)) {
-        sluice_set_error(err, err_size,
-                         "%s: the scene has no light (no point light and no emissive material)",
-                         b->source);
+        ne += sr_material_is_emissive(&b->materials[b->tri_materials[t]]) != 0;
+    int add_light = b->light_count == 0 && ne == 0 && (flags & SR_SCENE_DEFAULT_LIGHT);
+    if (b->light_count == 0 && ne == 0 && !add_light && !(flags & SR_SCENE_ALLOW_NO_LIGHT)) {
+        sr_set_error(err, err_size,
+                     "%s: the scene has no light (no point light and no emissive material)",
+                     b->source);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
 
-    sluice_scene *s = calloc(1, sizeof *s);
+    sr_scene *s = calloc(1, sizeof *s);
     if (!s) {
-        sluice_set_error(err, err_size, "%s: out of memory", b->source);
+        sr_set_error(err, err_size, "%s: out of memory", b->source);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     s->emissive = malloc((ne ? ne : 1) * sizeof *s->emissive);
@@ -813,12 +804,12 @@ sluice_status sluice_scene_builder_finish(sluice_scene_builder *b, unsigned flag
         free(s->emissive_area);
         free(s->emissive_cdf);
         free(s);
-        sluice_set_error(err, err_size, "%s: out of memory", b->source);
+        sr_set_error(err, err_size, "%s: out of memory", b->source);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
 
     /* Bounds and per-kind statistics. */
-    sluice_scene_stats *st = &s->stats;
+    sr_scene_stats *st = &s->stats;
     for (int k = 0; k < 3; ++k) {
         st->bounds_min[k] = INFINITY;
         st->bounds_max[k] = -INFINITY;
@@ -833,10 +824,10 @@ sluice_status sluice_scene_builder_finish(sluice_scene_builder *b, unsigned flag
     double sum = 0.0;
     size_t e = 0;
     for (size_t t = 0; t < b->triangle_count; ++t) {
-        const sluice_material *m = &b->materials[b->tri_materials[t]];
+        const sr_material *m = &b->materials[b->tri_materials[t]];
         st->triangles_by_kind[m->kind]++;
-        st->kinds_present |= SLUICE_KIND_BIT(m->kind);
-        if (!sluice_material_is_emissive(m))
+        st->kinds_present |= SR_KIND_BIT(m->kind);
+        if (!sr_material_is_emissive(m))
             continue;
         double a = tri_area(b->positions, b->indices + 3 * t);
         s->emissive[e] = (uint32_t)t;
@@ -867,20 +858,20 @@ sluice_status sluice_scene_builder_finish(sluice_scene_builder *b, unsigned flag
     if (add_light) {
         double d[3] = {0.4, 1.0, 0.6};
         unit(d);
-        sluice_point_light l;
+        sr_point_light l;
         for (int k = 0; k < 3; ++k) {
             l.position[k] = (float)(c[k] + 2.0 * r * d[k]);
             l.intensity[k] = (float)(4.0 * r * r);
         }
         b->lights[b->light_count++] = l;
-        sluice_scene_builder_warn(b, "%s: no light in the scene: added the default point light",
-                                  b->source);
+        sr_scene_builder_warn(b, "%s: no light in the scene: added the default point light",
+                              b->source);
     }
     if (!b->has_camera) {
         double d[3] = {0.0, 0.25, 1.0};
         unit(d);
         double dist = 1.1 * r / sin(20.0 * PI / 180.0);
-        sluice_camera cam;
+        sr_camera cam;
         for (int k = 0; k < 3; ++k) {
             cam.eye[k] = (float)(c[k] + dist * d[k]);
             cam.look_at[k] = (float)c[k];
@@ -954,7 +945,7 @@ sluice_status sluice_scene_builder_finish(sluice_scene_builder *b, unsigned flag
 /* Scene getters                                                       */
 /* ------------------------------------------------------------------ */
 
-void sluice_scene_destroy(sluice_scene *s)
+void sr_scene_destroy(sr_scene *s)
 {
     if (!s)
         return;
@@ -972,67 +963,67 @@ void sluice_scene_destroy(sluice_scene *s)
     free(s);
 }
 
-const char *sluice_scene_source(const sluice_scene *s)
+const char *sr_scene_source(const sr_scene *s)
 {
     return s ? s->source : NULL;
 }
 
-size_t sluice_scene_vertex_count(const sluice_scene *s)
+size_t sr_scene_vertex_count(const sr_scene *s)
 {
     return s ? s->vertex_count : 0;
 }
 
-size_t sluice_scene_triangle_count(const sluice_scene *s)
+size_t sr_scene_triangle_count(const sr_scene *s)
 {
     return s ? s->triangle_count : 0;
 }
 
-const float *sluice_scene_positions(const sluice_scene *s)
+const float *sr_scene_positions(const sr_scene *s)
 {
     return s ? s->positions : NULL;
 }
 
-const float *sluice_scene_normals(const sluice_scene *s)
+const float *sr_scene_normals(const sr_scene *s)
 {
     return s ? s->normals : NULL;
 }
 
-const uint32_t *sluice_scene_indices(const sluice_scene *s)
+const uint32_t *sr_scene_indices(const sr_scene *s)
 {
     return s ? s->indices : NULL;
 }
 
-const uint32_t *sluice_scene_triangle_materials(const sluice_scene *s)
+const uint32_t *sr_scene_triangle_materials(const sr_scene *s)
 {
     return s ? s->tri_materials : NULL;
 }
 
-size_t sluice_scene_material_count(const sluice_scene *s)
+size_t sr_scene_material_count(const sr_scene *s)
 {
     return s ? s->material_count : 0;
 }
 
-const sluice_material *sluice_scene_materials(const sluice_scene *s)
+const sr_material *sr_scene_materials(const sr_scene *s)
 {
     return s ? s->materials : NULL;
 }
 
-size_t sluice_scene_point_light_count(const sluice_scene *s)
+size_t sr_scene_point_light_count(const sr_scene *s)
 {
     return s ? s->light_count : 0;
 }
 
-const sluice_point_light *sluice_scene_point_lights(const sluice_scene *s)
+const sr_point_light *sr_scene_point_lights(const sr_scene *s)
 {
     return s ? s->lights : NULL;
 }
 
-size_t sluice_scene_light_count(const sluice_scene *s)
+size_t sr_scene_light_count(const sr_scene *s)
 {
     return s ? s->light_count + s->emissive_count : 0;
 }
 
-void sluice_scene_area_lights(const sluice_scene *s, sluice_area_lights *out)
+void sr_scene_area_lights(const sr_scene *s, sr_area_lights *out)
 {
     if (!out)
         return;
@@ -1048,22 +1039,22 @@ void sluice_scene_area_lights(const sluice_scene *s, sluice_area_lights *out)
         out->total_power[k] = s->emissive_power[k];
 }
 
-const sluice_camera *sluice_scene_camera(const sluice_scene *s)
+const sr_camera *sr_scene_camera(const sr_scene *s)
 {
     return s ? &s->camera : NULL;
 }
 
-const sluice_render_settings *sluice_scene_render_settings(const sluice_scene *s)
+const sr_render_settings *sr_scene_render_settings(const sr_scene *s)
 {
     return s ? &s->render : NULL;
 }
 
-const sluice_scene_stats *sluice_scene_statistics(const sluice_scene *s)
+const sr_scene_stats *sr_scene_statistics(const sr_scene *s)
 {
     return s ? &s->stats : NULL;
 }
 
-const char *sluice_scene_warnings(const sluice_scene *s)
+const char *sr_scene_warnings(const sr_scene *s)
 {
     return s && s->warnings ? s->warnings : "";
 }

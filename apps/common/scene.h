@@ -20,10 +20,10 @@
  * renderer can pick one in proportion to its area (Purcell ch. 6.1, photon
  * emission; ch. 5 samples the CORNELL BOX light for soft shadows).
  *
- * A scene comes from sluice_scene_load() (a built-in scene, a JSON scene file
+ * A scene comes from sr_scene_load() (a built-in scene, a JSON scene file
  * or a mesh file read with assimp), or from a builder: add materials, meshes
  * (with a transform), lights and a camera, then finish. Finishing validates
- * everything and yields an immutable sluice_scene.
+ * everything and yields an immutable sr_scene.
  *
  * Conventions are those of <sluice/sluice.h>: fallible functions return a
  * sluice_status; nothing aborts, exits or prints; destroy accepts NULL. A
@@ -31,11 +31,11 @@
  * bytes into `err` (which may be NULL) that names the file, the field, the
  * vertex or the triangle involved. Warnings (dropped degenerate triangles,
  * a glossy material that is not energy conserving, ...) never fail a call:
- * they are counted in the statistics, kept as text (sluice_scene_warnings)
+ * they are counted in the statistics, kept as text (sr_scene_warnings)
  * and passed to an optional callback as they happen.
  */
-#ifndef SLUICE_APPS_SCENE_H
-#define SLUICE_APPS_SCENE_H
+#ifndef SR_APPS_SCENE_H
+#define SR_APPS_SCENE_H
 
 #include "sluice/sluice.h"
 
@@ -51,28 +51,28 @@ extern "C" {
 /* ------------------------------------------------------------------ */
 
 /** What a surface does with light. */
-typedef enum sluice_material_kind {
+typedef enum sr_material_kind {
     /** Lambertian: reflects `albedo` / pi in every direction. */
-    SLUICE_MATERIAL_DIFFUSE = 0,
+    SR_MATERIAL_DIFFUSE = 0,
     /** Perfect specular reflection, scaled by `specular`. */
-    SLUICE_MATERIAL_MIRROR = 1,
+    SR_MATERIAL_MIRROR = 1,
     /** Dielectric: reflects and refracts by Fresnel's equations with index of
      *  refraction `ior` (outside is vacuum); `specular` tints both. */
-    SLUICE_MATERIAL_GLASS = 2,
+    SR_MATERIAL_GLASS = 2,
     /** Modified Blinn-Phong (Jakob 2007, §2.4.1, eq. 2.16):
      *  f = ks (n + 2) / (2 pi) cos^n(N, H) + kd / pi, with kd = `albedo`,
      *  ks = `specular`, n = `exponent`; energy conserving when kd + ks <= 1. */
-    SLUICE_MATERIAL_GLOSSY = 3,
+    SR_MATERIAL_GLOSSY = 3,
     /** A light source surface: emits `emission` (required to be non-zero) and
      *  reflects diffusely with `albedo` (usually black). */
-    SLUICE_MATERIAL_EMISSIVE = 4,
-} sluice_material_kind;
+    SR_MATERIAL_EMISSIVE = 4,
+} sr_material_kind;
 
 /** Number of material kinds (the size of per-kind arrays). */
-#define SLUICE_MATERIAL_KIND_COUNT 5
+#define SR_MATERIAL_KIND_COUNT 5
 
 /** Longest material name kept, including the terminating NUL. */
-#define SLUICE_MATERIAL_NAME_SIZE 64
+#define SR_MATERIAL_NAME_SIZE 64
 
 /**
  * A material: plain data, uploaded as is. Colours are linear RGB. Fields a
@@ -80,38 +80,38 @@ typedef enum sluice_material_kind {
  * not negative). Any kind may emit: a non-zero `emission` makes every
  * triangle of the material part of an area light.
  */
-typedef struct sluice_material {
-    sluice_material_kind kind;
-    float albedo[3];                      /**< diffuse albedo (DIFFUSE, EMISSIVE), kd (GLOSSY) */
-    float specular[3];                    /**< reflectance (MIRROR), tint (GLASS), ks (GLOSSY) */
-    float exponent;                       /**< Blinn-Phong exponent n (GLOSSY), >= 0 */
-    float ior;                            /**< index of refraction (GLASS), > 0 */
-    float emission[3];                    /**< emitted radiance from the front side, >= 0 */
-    char name[SLUICE_MATERIAL_NAME_SIZE]; /**< for messages and listings */
-} sluice_material;
+typedef struct sr_material {
+    sr_material_kind kind;
+    float albedo[3];                  /**< diffuse albedo (DIFFUSE, EMISSIVE), kd (GLOSSY) */
+    float specular[3];                /**< reflectance (MIRROR), tint (GLASS), ks (GLOSSY) */
+    float exponent;                   /**< Blinn-Phong exponent n (GLOSSY), >= 0 */
+    float ior;                        /**< index of refraction (GLASS), > 0 */
+    float emission[3];                /**< emitted radiance from the front side, >= 0 */
+    char name[SR_MATERIAL_NAME_SIZE]; /**< for messages and listings */
+} sr_material;
 
 /** A material of `kind` with the defaults: albedo 0.8, specular 1 for MIRROR
  *  and GLASS and 0.2 for GLOSSY (then albedo 0.6), exponent 50, ior 1.5, no
  *  emission (an EMISSIVE one gets emission 1 and albedo 0), and `name`
  *  (truncated; NULL gives ""). */
-sluice_material sluice_material_make(sluice_material_kind kind, const char *name);
+sr_material sr_material_make(sr_material_kind kind, const char *name);
 
 /** "diffuse", "mirror", "glass", "glossy" or "emissive" ("?" otherwise). */
-const char *sluice_material_kind_name(sluice_material_kind kind);
+const char *sr_material_kind_name(sr_material_kind kind);
 
 /** Parses a kind name (as above, exact). Returns SLUICE_ERROR_NOT_FOUND for
  *  anything else. */
-sluice_status sluice_material_kind_parse(const char *name, sluice_material_kind *kind);
+sluice_status sr_material_kind_parse(const char *name, sr_material_kind *kind);
 
 /** Non-zero when any component of the material's emission is above zero. */
-int sluice_material_is_emissive(const sluice_material *m);
+int sr_material_is_emissive(const sr_material *m);
 
 /** An isotropic point light: radiant intensity `intensity` (power per
  *  steradian, RGB) in every direction; its power is 4 pi times that. */
-typedef struct sluice_point_light {
+typedef struct sr_point_light {
     float position[3];
     float intensity[3];
-} sluice_point_light;
+} sr_point_light;
 
 /**
  * The area lights: the emissive triangles. All arrays have `count` entries
@@ -121,238 +121,237 @@ typedef struct sluice_point_light {
  * point on that triangle. `total_power` is the sum of pi * emission * area
  * (the flux of a one-sided Lambertian emitter).
  */
-typedef struct sluice_area_lights {
+typedef struct sr_area_lights {
     size_t count;
     const uint32_t *triangles; /**< indices of emissive triangles, ascending */
     const float *area;         /**< area of each */
     const float *area_cdf;     /**< cumulative area, normalised */
     double total_area;
     double total_power[3];
-} sluice_area_lights;
+} sr_area_lights;
 
 /** Largest image width or height a camera may ask for. */
-#define SLUICE_SCENE_MAX_IMAGE_SIDE 65536u
+#define SR_SCENE_MAX_IMAGE_SIDE 65536u
 
 /** A pinhole camera: the image plane's vertical extent is set by `vfov`
  *  (degrees, in (0, 180)); pixels are square, so the horizontal field of view
  *  follows from width / height. `up` need not be orthogonal to the view
  *  direction, only not parallel to it. */
-typedef struct sluice_camera {
+typedef struct sr_camera {
     float eye[3];
     float look_at[3];
     float up[3];
     float vfov;      /**< vertical field of view, degrees */
-    uint32_t width;  /**< image width in pixels, 1 .. SLUICE_SCENE_MAX_IMAGE_SIDE */
-    uint32_t height; /**< image height in pixels, 1 .. SLUICE_SCENE_MAX_IMAGE_SIDE */
-} sluice_camera;
+    uint32_t width;  /**< image width in pixels, 1 .. SR_SCENE_MAX_IMAGE_SIDE */
+    uint32_t height; /**< image height in pixels, 1 .. SR_SCENE_MAX_IMAGE_SIDE */
+} sr_camera;
 
 /** What a scene file suggests to render (Purcell fig. 3.3 and ch. 6); apps
  *  may ignore it. */
-typedef enum sluice_render_mode {
-    SLUICE_RENDER_AUTO = 0,    /**< the app decides */
-    SLUICE_RENDER_CAST = 1,    /**< eye rays only */
-    SLUICE_RENDER_SHADOW = 2,  /**< eye rays and shadow rays */
-    SLUICE_RENDER_WHITTED = 3, /**< shadows, reflection and refraction */
-    SLUICE_RENDER_PATH = 4,    /**< path tracing */
-    SLUICE_RENDER_PHOTON = 5,  /**< ray tracing with a photon map (ch. 6) */
-} sluice_render_mode;
+typedef enum sr_render_mode {
+    SR_RENDER_AUTO = 0,    /**< the app decides */
+    SR_RENDER_CAST = 1,    /**< eye rays only */
+    SR_RENDER_SHADOW = 2,  /**< eye rays and shadow rays */
+    SR_RENDER_WHITTED = 3, /**< shadows, reflection and refraction */
+    SR_RENDER_PATH = 4,    /**< path tracing */
+    SR_RENDER_PHOTON = 5,  /**< ray tracing with a photon map (ch. 6) */
+} sr_render_mode;
 
 /** "auto", "cast", "shadow", "whitted", "path" or "photon" ("?" otherwise). */
-const char *sluice_render_mode_name(sluice_render_mode mode);
+const char *sr_render_mode_name(sr_render_mode mode);
 
 /** Parses a mode name (as above, exact); SLUICE_ERROR_NOT_FOUND otherwise. */
-sluice_status sluice_render_mode_parse(const char *name, sluice_render_mode *mode);
+sluice_status sr_render_mode_parse(const char *name, sr_render_mode *mode);
 
 /** Render settings a scene carries. 0 in `photons` or `photon_lookup` means
  *  "the app decides". */
-typedef struct sluice_render_settings {
+typedef struct sr_render_settings {
     uint32_t samples_per_pixel; /**< eye rays per pixel, >= 1 (default 1) */
     uint32_t max_depth;         /**< longest path or reflection chain (default 5) */
     uint32_t light_samples;     /**< shadow rays per area-light hit, >= 1 (default 1) */
     uint32_t photons;           /**< photons to store (ch. 6.2; default 0) */
     uint32_t photon_lookup;     /**< photons per radiance estimate (ch. 6.3; default 0) */
-    sluice_render_mode mode;    /**< default SLUICE_RENDER_AUTO */
-} sluice_render_settings;
+    sr_render_mode mode;        /**< default SR_RENDER_AUTO */
+} sr_render_settings;
 
 /** The default render settings (see the field comments). */
-sluice_render_settings sluice_render_settings_default(void);
+sr_render_settings sr_render_settings_default(void);
 
-/** Bit of sluice_scene_stats.kinds_present for a material kind. */
-#define SLUICE_KIND_BIT(kind) (1u << (unsigned)(kind))
+/** Bit of sr_scene_stats.kinds_present for a material kind. */
+#define SR_KIND_BIT(kind) (1u << (unsigned)(kind))
 
 /** What a scene holds, so that apps can skip what it does not need (no glass:
  *  no refraction rays; no area light: no light sampling, ...). */
-typedef struct sluice_scene_stats {
+typedef struct sr_scene_stats {
     size_t triangles;
     size_t vertices;
     float bounds_min[3]; /**< of all vertices */
     float bounds_max[3];
     size_t materials;
-    /** Triangles per material kind, indexed by sluice_material_kind. */
-    size_t triangles_by_kind[SLUICE_MATERIAL_KIND_COUNT];
-    /** SLUICE_KIND_BIT(kind) for every kind with at least one triangle. */
+    /** Triangles per material kind, indexed by sr_material_kind. */
+    size_t triangles_by_kind[SR_MATERIAL_KIND_COUNT];
+    /** SR_KIND_BIT(kind) for every kind with at least one triangle. */
     unsigned kinds_present;
     size_t point_lights;
     size_t emissive_triangles; /**< area-light triangles (of any kind) */
     double emissive_area;
     size_t degenerate_dropped; /**< zero-area triangles dropped while building */
     size_t warnings;           /**< warnings issued while building */
-    int has_normals;           /**< non-zero when sluice_scene_normals() is not NULL */
-} sluice_scene_stats;
+    int has_normals;           /**< non-zero when sr_scene_normals() is not NULL */
+} sr_scene_stats;
 
 /* ------------------------------------------------------------------ */
 /* Scenes                                                              */
 /* ------------------------------------------------------------------ */
 
-typedef struct sluice_scene sluice_scene;
+typedef struct sr_scene sr_scene;
 
-/** Flags for sluice_scene_builder_finish() and sluice_scene_load_options. */
+/** Flags for sr_scene_builder_finish() and sr_scene_load_options. */
 enum {
     /** Accept a scene with no point light and no emissive triangle (ray
      *  casting tests). Without it such a scene is an error. */
-    SLUICE_SCENE_ALLOW_NO_LIGHT = 1u << 0,
+    SR_SCENE_ALLOW_NO_LIGHT = 1u << 0,
     /** When the scene has no light at all, add the default point light (see
-     *  sluice_scene_builder_finish) instead of failing. */
-    SLUICE_SCENE_DEFAULT_LIGHT = 1u << 1,
+     *  sr_scene_builder_finish) instead of failing. */
+    SR_SCENE_DEFAULT_LIGHT = 1u << 1,
 };
 
 /** Receives each warning as it is issued (the text has no newline). */
-typedef void (*sluice_scene_warning_fn)(void *user, const char *message);
+typedef void (*sr_scene_warning_fn)(void *user, const char *message);
 
-/** Options for sluice_scene_load(); zero-initialise, then set fields. NULL
+/** Options for sr_scene_load(); zero-initialise, then set fields. NULL
  *  options mean all zero. */
-typedef struct sluice_scene_load_options {
-    unsigned flags;                  /**< SLUICE_SCENE_ALLOW_NO_LIGHT */
-    sluice_scene_warning_fn warning; /**< optional */
-    void *warning_user;              /**< passed to `warning` */
-} sluice_scene_load_options;
+typedef struct sr_scene_load_options {
+    unsigned flags;              /**< SR_SCENE_ALLOW_NO_LIGHT */
+    sr_scene_warning_fn warning; /**< optional */
+    void *warning_user;          /**< passed to `warning` */
+} sr_scene_load_options;
 
 /**
  * Loads a scene by name or path, in this order:
- *   1. a built-in scene name (sluice_scene_builtin_names(); "spheres:N");
+ *   1. a built-in scene name (sr_scene_builtin_names(); "spheres:N");
  *   2. a path ending in ".json" (any case): a JSON scene file (docs/scenes.md);
  *   3. any other path: a mesh file read with assimp (OBJ with MTL, PLY, glTF 2
- *      .gltf/.glb and whatever else assimp reads), see sluice_scene_load_mesh.
+ *      .gltf/.glb and whatever else assimp reads), see sr_scene_load_mesh.
  * (A file named like a built-in scene is reached as "./NAME".) On failure
  * `*out` is NULL and `err` says why: SLUICE_ERROR_NOT_FOUND for a missing
  * file, SLUICE_ERROR_IO for a file that cannot be read or parsed,
  * SLUICE_ERROR_INVALID_ARGUMENT for invalid content, SLUICE_ERROR_LIMIT for
  * a scene beyond the limits, SLUICE_ERROR_OUT_OF_MEMORY.
  */
-sluice_status sluice_scene_load(const char *name_or_path, const sluice_scene_load_options *opts,
-                                sluice_scene **out, char *err, size_t err_size);
+sluice_status sr_scene_load(const char *name_or_path, const sr_scene_load_options *opts,
+                            sr_scene **out, char *err, size_t err_size);
 
 /**
  * Loads a mesh file with assimp: triangulated, identical vertices joined,
  * points and lines dropped, the node hierarchy's transforms applied, normals
  * kept when the file has them. Materials map as described at
- * sluice_scene_builder_add_mesh_file. The scene gets the default camera
+ * sr_scene_builder_add_mesh_file. The scene gets the default camera
  * framing its bounds and, when no material emits, the default point light
- * (both described at sluice_scene_builder_finish).
+ * (both described at sr_scene_builder_finish).
  */
-sluice_status sluice_scene_load_mesh(const char *path, const sluice_scene_load_options *opts,
-                                     sluice_scene **out, char *err, size_t err_size);
+sluice_status sr_scene_load_mesh(const char *path, const sr_scene_load_options *opts,
+                                 sr_scene **out, char *err, size_t err_size);
 
 /** Loads a JSON scene file (format: docs/scenes.md). Errors name the file and
  *  the field, e.g. "s.json: meshes[2].transform.scale: expected a number or
  *  an array of 3 numbers", or the line and column of a syntax error. */
-sluice_status sluice_scene_load_json(const char *path, const sluice_scene_load_options *opts,
-                                     sluice_scene **out, char *err, size_t err_size);
+sluice_status sr_scene_load_json(const char *path, const sr_scene_load_options *opts,
+                                 sr_scene **out, char *err, size_t err_size);
 
 /** Builds a built-in scene by name; SLUICE_ERROR_NOT_FOUND for an unknown
  *  name, SLUICE_ERROR_INVALID_ARGUMENT for a bad "spheres:N". */
-sluice_status sluice_scene_load_builtin(const char *name, const sluice_scene_load_options *opts,
-                                        sluice_scene **out, char *err, size_t err_size);
+sluice_status sr_scene_load_builtin(const char *name, const sr_scene_load_options *opts,
+                                    sr_scene **out, char *err, size_t err_size);
 
 /** The names of the built-in scenes, NULL-terminated, in a fixed order. The
  *  parametrised one appears as "spheres:N". */
-const char *const *sluice_scene_builtin_names(void);
+const char *const *sr_scene_builtin_names(void);
 
 /** A one-line description of a built-in scene (a name from the list above,
  *  or "spheres:<anything>"), or NULL when there is no such scene. */
-const char *sluice_scene_builtin_description(const char *name);
+const char *sr_scene_builtin_description(const char *name);
 
 /** Non-zero when `name` selects a built-in scene: one of the names above, or
  *  "spheres:" followed by anything (a bad count fails when loading). */
-int sluice_scene_is_builtin(const char *name);
+int sr_scene_is_builtin(const char *name);
 
 /** Frees the scene (NULL is fine). */
-void sluice_scene_destroy(sluice_scene *scene);
+void sr_scene_destroy(sr_scene *scene);
 
 /** Where the scene came from: the built-in name or the path it was loaded
  *  from, or the builder's `source`. */
-const char *sluice_scene_source(const sluice_scene *scene);
+const char *sr_scene_source(const sr_scene *scene);
 
 /** Number of vertices. */
-size_t sluice_scene_vertex_count(const sluice_scene *scene);
+size_t sr_scene_vertex_count(const sr_scene *scene);
 
 /** Number of triangles. */
-size_t sluice_scene_triangle_count(const sluice_scene *scene);
+size_t sr_scene_triangle_count(const sr_scene *scene);
 
 /** Vertex positions, 3 floats per vertex. */
-const float *sluice_scene_positions(const sluice_scene *scene);
+const float *sr_scene_positions(const sr_scene *scene);
 
 /** Vertex normals, 3 floats per vertex, unit length or zero (zero: use the
  *  geometric normal), or NULL when no mesh of the scene had normals. */
-const float *sluice_scene_normals(const sluice_scene *scene);
+const float *sr_scene_normals(const sr_scene *scene);
 
 /** Triangle vertex indices, 3 per triangle. */
-const uint32_t *sluice_scene_indices(const sluice_scene *scene);
+const uint32_t *sr_scene_indices(const sr_scene *scene);
 
 /** The material index of each triangle. */
-const uint32_t *sluice_scene_triangle_materials(const sluice_scene *scene);
+const uint32_t *sr_scene_triangle_materials(const sr_scene *scene);
 
 /** Number of materials. */
-size_t sluice_scene_material_count(const sluice_scene *scene);
+size_t sr_scene_material_count(const sr_scene *scene);
 
 /** The material table. */
-const sluice_material *sluice_scene_materials(const sluice_scene *scene);
+const sr_material *sr_scene_materials(const sr_scene *scene);
 
 /** Number of point lights. */
-size_t sluice_scene_point_light_count(const sluice_scene *scene);
+size_t sr_scene_point_light_count(const sr_scene *scene);
 
 /** The point lights. */
-const sluice_point_light *sluice_scene_point_lights(const sluice_scene *scene);
+const sr_point_light *sr_scene_point_lights(const sr_scene *scene);
 
 /** Number of lights: point lights plus emissive triangles. */
-size_t sluice_scene_light_count(const sluice_scene *scene);
+size_t sr_scene_light_count(const sr_scene *scene);
 
 /** Describes the area lights (pointers into the scene). */
-void sluice_scene_area_lights(const sluice_scene *scene, sluice_area_lights *out);
+void sr_scene_area_lights(const sr_scene *scene, sr_area_lights *out);
 
 /** The camera. */
-const sluice_camera *sluice_scene_camera(const sluice_scene *scene);
+const sr_camera *sr_scene_camera(const sr_scene *scene);
 
 /** The render settings. */
-const sluice_render_settings *sluice_scene_render_settings(const sluice_scene *scene);
+const sr_render_settings *sr_scene_render_settings(const sr_scene *scene);
 
 /** The statistics. */
-const sluice_scene_stats *sluice_scene_statistics(const sluice_scene *scene);
+const sr_scene_stats *sr_scene_statistics(const sr_scene *scene);
 
 /** The warnings issued while building, one per line ("" when none). After 32
  *  of them only a count of the rest is kept; stats.warnings counts them all. */
-const char *sluice_scene_warnings(const sluice_scene *scene);
+const char *sr_scene_warnings(const sr_scene *scene);
 
 /* ------------------------------------------------------------------ */
 /* Building scenes                                                     */
 /* ------------------------------------------------------------------ */
 
-typedef struct sluice_scene_builder sluice_scene_builder;
+typedef struct sr_scene_builder sr_scene_builder;
 
 /** Creates an empty builder. `source` (may be NULL) names the scene in
- *  messages and becomes sluice_scene_source(). */
-sluice_status sluice_scene_builder_create(const char *source, sluice_scene_builder **out);
+ *  messages and becomes sr_scene_source(). */
+sluice_status sr_scene_builder_create(const char *source, sr_scene_builder **out);
 
 /** Frees the builder and everything it holds (NULL is fine). */
-void sluice_scene_builder_destroy(sluice_scene_builder *b);
+void sr_scene_builder_destroy(sr_scene_builder *b);
 
 /** Sets the warning callback (NULL: none). */
-void sluice_scene_builder_set_warning_callback(sluice_scene_builder *b, sluice_scene_warning_fn fn,
-                                               void *user);
+void sr_scene_builder_set_warning_callback(sr_scene_builder *b, sr_scene_warning_fn fn, void *user);
 
 /** Issues a warning: counted, kept and passed to the callback. Loaders use it
  *  for what they skip or guess. */
-void sluice_scene_builder_warn(sluice_scene_builder *b, const char *fmt, ...)
+void sr_scene_builder_warn(sr_scene_builder *b, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))
 #endif
@@ -366,21 +365,21 @@ void sluice_scene_builder_warn(sluice_scene_builder *b, const char *fmt, ...)
  * material has kd + ks > 1 in some channel (not energy conserving, Jakob
  * §2.4.1).
  */
-sluice_status sluice_scene_builder_add_material(sluice_scene_builder *b, const sluice_material *m,
-                                                uint32_t *index, char *err, size_t err_size);
+sluice_status sr_scene_builder_add_material(sr_scene_builder *b, const sr_material *m,
+                                            uint32_t *index, char *err, size_t err_size);
 
 /** Finds the first material named `name`; SLUICE_ERROR_NOT_FOUND if none. */
-sluice_status sluice_scene_builder_find_material(const sluice_scene_builder *b, const char *name,
-                                                 uint32_t *index);
+sluice_status sr_scene_builder_find_material(const sr_scene_builder *b, const char *name,
+                                             uint32_t *index);
 
 /** Number of materials added so far. */
-size_t sluice_scene_builder_material_count(const sluice_scene_builder *b);
+size_t sr_scene_builder_material_count(const sr_scene_builder *b);
 
 /** Number of triangles kept so far. */
-size_t sluice_scene_builder_triangle_count(const sluice_scene_builder *b);
+size_t sr_scene_builder_triangle_count(const sr_scene_builder *b);
 
 /** A mesh to add: arrays in the scene's layout, read during the call only. */
-typedef struct sluice_mesh_desc {
+typedef struct sr_mesh_desc {
     /** Names the mesh in messages ("bunny.obj", "meshes[2]"); may be NULL. */
     const char *source;
     const float *positions; /**< 3 per vertex */
@@ -397,7 +396,7 @@ typedef struct sluice_mesh_desc {
      *  inverse transpose; a mirroring transform also reverses the winding,
      *  so the front side stays the front side. */
     const float *transform;
-} sluice_mesh_desc;
+} sr_mesh_desc;
 
 /**
  * Adds a mesh. Everything is checked before anything is added, so a failed
@@ -411,8 +410,8 @@ typedef struct sluice_mesh_desc {
  * statistics and reported by one warning per mesh. Only the vertices that
  * kept triangles use are added.
  */
-sluice_status sluice_scene_builder_add_mesh(sluice_scene_builder *b, const sluice_mesh_desc *mesh,
-                                            char *err, size_t err_size);
+sluice_status sr_scene_builder_add_mesh(sr_scene_builder *b, const sr_mesh_desc *mesh, char *err,
+                                        size_t err_size);
 
 /**
  * Reads a mesh file with assimp and adds its meshes, transformed by the
@@ -430,12 +429,12 @@ sluice_status sluice_scene_builder_add_mesh(sluice_scene_builder *b, const sluic
  * `label` (may be NULL: the path) names the file in messages. Errors:
  * SLUICE_ERROR_NOT_FOUND for a missing file, SLUICE_ERROR_IO with assimp's
  * message when it cannot read it (unknown format, syntax), and those of
- * sluice_scene_builder_add_mesh. On failure the builder is left with the
+ * sr_scene_builder_add_mesh. On failure the builder is left with the
  * materials and meshes added before the failing mesh; callers destroy it.
  */
-sluice_status sluice_scene_builder_add_mesh_file(sluice_scene_builder *b, const char *path,
-                                                 const float *transform, const uint32_t *material,
-                                                 const char *label, char *err, size_t err_size);
+sluice_status sr_scene_builder_add_mesh_file(sr_scene_builder *b, const char *path,
+                                             const float *transform, const uint32_t *material,
+                                             const char *label, char *err, size_t err_size);
 
 /**
  * Adds a sphere of `radius` around `center`: a geodesic sphere (an
@@ -443,21 +442,21 @@ sluice_status sluice_scene_builder_add_mesh_file(sluice_scene_builder *b, const 
  * onto the sphere) with 20 f^2 triangles, 10 f^2 + 2 shared vertices and
  * exact radial normals; 1 <= frequency <= 256.
  */
-sluice_status sluice_scene_builder_add_sphere(sluice_scene_builder *b, const float center[3],
-                                              float radius, unsigned frequency, uint32_t material,
-                                              const float *transform, char *err, size_t err_size);
+sluice_status sr_scene_builder_add_sphere(sr_scene_builder *b, const float center[3], float radius,
+                                          unsigned frequency, uint32_t material,
+                                          const float *transform, char *err, size_t err_size);
 
 /** Adds the parallelogram corner, corner + u, corner + u + v, corner + v as
  *  2 triangles; its front side faces u x v. */
-sluice_status sluice_scene_builder_add_quad(sluice_scene_builder *b, const float corner[3],
-                                            const float u[3], const float v[3], uint32_t material,
-                                            const float *transform, char *err, size_t err_size);
+sluice_status sr_scene_builder_add_quad(sr_scene_builder *b, const float corner[3],
+                                        const float u[3], const float v[3], uint32_t material,
+                                        const float *transform, char *err, size_t err_size);
 
 /** Adds an axis-aligned box from `lo` to `hi`: 12 triangles facing out, 8
  *  shared vertices, no normals (flat). */
-sluice_status sluice_scene_builder_add_box(sluice_scene_builder *b, const float lo[3],
-                                           const float hi[3], uint32_t material,
-                                           const float *transform, char *err, size_t err_size);
+sluice_status sr_scene_builder_add_box(sr_scene_builder *b, const float lo[3], const float hi[3],
+                                       uint32_t material, const float *transform, char *err,
+                                       size_t err_size);
 
 /**
  * Adds a ring standing on the plane y = center[1]: a closed band between the
@@ -466,54 +465,52 @@ sluice_status sluice_scene_builder_add_box(sluice_scene_builder *b, const float 
  * and inner walls with smooth normals, flat top and bottom, 8 * segments
  * triangles. Purcell's RING scene (ch. 6, fig. 6.7) is a mirror one.
  */
-sluice_status sluice_scene_builder_add_ring(sluice_scene_builder *b, const float center[3],
-                                            float radius, float thickness, float height,
-                                            unsigned segments, uint32_t material,
-                                            const float *transform, char *err, size_t err_size);
+sluice_status sr_scene_builder_add_ring(sr_scene_builder *b, const float center[3], float radius,
+                                        float thickness, float height, unsigned segments,
+                                        uint32_t material, const float *transform, char *err,
+                                        size_t err_size);
 
 /**
  * Adds the Utah teapot (Newell's 32 bicubic Bezier patches), each patch
  * tessellated into `n` x `n` quads (2 <= n <= 64: with n = 1 the four corners
  * of each spout-tip patch lie on one line) with normals from the patch
  * derivatives; the triangles that collapse at the lid's knob and the bottom's
- * centre are left out, giving SLUICE_TEAPOT_TRIANGLES(n) triangles. Below
+ * centre are left out, giving SR_TEAPOT_TRIANGLES(n) triangles. Below
  * n = 3 the spout's tip is too coarse for its normals to agree with the
  * winding everywhere. In the
  * patch data's own frame (z up, spout along +x, bottom at z = 0) the teapot
  * spans about x in [-3, 3.43], y in [-2, 2], z in [0, 3.15]; the builder maps
  * it to y up ((x, y, z) -> (x, z, -y)) before `transform`.
  */
-sluice_status sluice_scene_builder_add_teapot(sluice_scene_builder *b, unsigned n,
-                                              uint32_t material, const float *transform, char *err,
-                                              size_t err_size);
+sluice_status sr_scene_builder_add_teapot(sr_scene_builder *b, unsigned n, uint32_t material,
+                                          const float *transform, char *err, size_t err_size);
 
 /** Triangles of a teapot tessellated with n x n quads per patch: 32 patches
  *  of 2 n^2, less n for each of the 8 patches with a collapsed edge. */
-#define SLUICE_TEAPOT_TRIANGLES(n) (64u * (n) * (n)-8u * (n))
+#define SR_TEAPOT_TRIANGLES(n) (64u * (n) * (n)-8u * (n))
 
 /** Adds a point light; fails for a non-finite position or a negative or
  *  non-finite intensity. */
-sluice_status sluice_scene_builder_add_point_light(sluice_scene_builder *b,
-                                                   const sluice_point_light *light, char *err,
-                                                   size_t err_size);
+sluice_status sr_scene_builder_add_point_light(sr_scene_builder *b, const sr_point_light *light,
+                                               char *err, size_t err_size);
 
 /** Sets the camera. Fails (naming the field) for non-finite vectors, eye ==
  *  look_at, up parallel to the view direction, vfov outside (0, 180), or a
- *  width or height of 0 or above SLUICE_SCENE_MAX_IMAGE_SIDE. */
-sluice_status sluice_scene_builder_set_camera(sluice_scene_builder *b, const sluice_camera *camera,
-                                              char *err, size_t err_size);
+ *  width or height of 0 or above SR_SCENE_MAX_IMAGE_SIDE. */
+sluice_status sr_scene_builder_set_camera(sr_scene_builder *b, const sr_camera *camera, char *err,
+                                          size_t err_size);
 
 /** Sets the render settings. Fails when samples_per_pixel or light_samples
  *  is 0 or the mode is unknown. */
-sluice_status sluice_scene_builder_set_render_settings(sluice_scene_builder *b,
-                                                       const sluice_render_settings *settings,
-                                                       char *err, size_t err_size);
+sluice_status sr_scene_builder_set_render_settings(sr_scene_builder *b,
+                                                   const sr_render_settings *settings, char *err,
+                                                   size_t err_size);
 
 /**
- * Validates and produces the scene; `flags` are SLUICE_SCENE_* flags.
+ * Validates and produces the scene; `flags` are SR_SCENE_* flags.
  * Fails with SLUICE_ERROR_INVALID_ARGUMENT for a scene with no triangles, or
  * with no light (no point light and no emissive triangle) unless
- * SLUICE_SCENE_ALLOW_NO_LIGHT or SLUICE_SCENE_DEFAULT_LIGHT is given.
+ * SR_SCENE_ALLOW_NO_LIGHT or SR_SCENE_DEFAULT_LIGHT is given.
  *
  * Defaults filled in here:
  *  - No camera set: the default camera frames the bounds. It looks at the
@@ -521,16 +518,16 @@ sluice_status sluice_scene_builder_set_render_settings(sluice_scene_builder *b,
  *    e = c + d (0, 0.25, 1) / |(0, 0.25, 1)|, with up +y, vfov 40 degrees,
  *    512 x 512 pixels, and d = 1.1 r / sin(20 deg) so that the bounding
  *    sphere (radius r, half the box diagonal) fits the view.
- *  - SLUICE_SCENE_DEFAULT_LIGHT and no light: one white point light at
+ *  - SR_SCENE_DEFAULT_LIGHT and no light: one white point light at
  *    c + 2 r (0.4, 1, 0.6) / |(0.4, 1, 0.6)| (above, right of and in front of
  *    the centre) with intensity 4 r^2, so a surface at c facing it receives
  *    irradiance 1.
  *
  * On success the builder is left empty (its arrays move into the scene) and
- * only sluice_scene_builder_destroy may follow; on failure it is unchanged.
+ * only sr_scene_builder_destroy may follow; on failure it is unchanged.
  */
-sluice_status sluice_scene_builder_finish(sluice_scene_builder *b, unsigned flags,
-                                          sluice_scene **out, char *err, size_t err_size);
+sluice_status sr_scene_builder_finish(sr_scene_builder *b, unsigned flags, sr_scene **out,
+                                      char *err, size_t err_size);
 
 #ifdef __cplusplus
 }

@@ -1,5 +1,5 @@
 /* Built-in scenes, the test scenes of Purcell's thesis (ch. 5 and 6) and a
- * few synthetic ones, and sluice_scene_load(), which resolves a name to a
+ * few synthetic ones, and sr_scene_load(), which resolves a name to a
  * built-in scene, a JSON file or a mesh file. Every scene here is fully
  * deterministic: its triangle count and bounds are fixed (docs/scenes.md
  * lists them and tests/test_scene.c checks them). */
@@ -49,12 +49,12 @@ static const char *const builtin_descriptions[] = {
 #define BUILTIN_COUNT (sizeof builtin_descriptions / sizeof builtin_descriptions[0])
 #define SPHERES_INDEX 6
 
-const char *const *sluice_scene_builtin_names(void)
+const char *const *sr_scene_builtin_names(void)
 {
     return builtin_names;
 }
 
-int sluice_scene_is_builtin(const char *name)
+int sr_scene_is_builtin(const char *name)
 {
     if (!name)
         return 0;
@@ -67,7 +67,7 @@ int sluice_scene_is_builtin(const char *name)
     return 0;
 }
 
-const char *sluice_scene_builtin_description(const char *name)
+const char *sr_scene_builtin_description(const char *name)
 {
     if (!name)
         return NULL;
@@ -84,18 +84,18 @@ const char *sluice_scene_builtin_description(const char *name)
 /* Helpers                                                             */
 /* ------------------------------------------------------------------ */
 
-static sluice_material diffuse(const char *name, float r, float g, float b)
+static sr_material diffuse(const char *name, float r, float g, float b)
 {
-    sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, name);
+    sr_material m = sr_material_make(SR_MATERIAL_DIFFUSE, name);
     m.albedo[0] = r;
     m.albedo[1] = g;
     m.albedo[2] = b;
     return m;
 }
 
-static sluice_material mirror(const char *name, float r, float g, float b)
+static sr_material mirror(const char *name, float r, float g, float b)
 {
-    sluice_material m = sluice_material_make(SLUICE_MATERIAL_MIRROR, name);
+    sr_material m = sr_material_make(SR_MATERIAL_MIRROR, name);
     m.specular[0] = r;
     m.specular[1] = g;
     m.specular[2] = b;
@@ -104,11 +104,11 @@ static sluice_material mirror(const char *name, float r, float g, float b)
 
 /* Adds a planar polygon given by 4 corners in order (counter-clockwise seen
  * from its front) as 2 triangles. */
-static sluice_status add_quad4(sluice_scene_builder *b, const char *source, const float p[12],
+static sluice_status add_quad4(sr_scene_builder *b, const char *source, const float p[12],
                                uint32_t material, char *err, size_t err_size)
 {
     static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
-    sluice_mesh_desc d;
+    sr_mesh_desc d;
     memset(&d, 0, sizeof d);
     d.source = source;
     d.positions = p;
@@ -116,13 +116,13 @@ static sluice_status add_quad4(sluice_scene_builder *b, const char *source, cons
     d.indices = idx;
     d.triangle_count = 2;
     d.material = material;
-    return sluice_scene_builder_add_mesh(b, &d, err, err_size);
+    return sr_scene_builder_add_mesh(b, &d, err, err_size);
 }
 
-static sluice_camera camera(float ex, float ey, float ez, float lx, float ly, float lz, float vfov,
-                            uint32_t w, uint32_t h)
+static sr_camera camera(float ex, float ey, float ez, float lx, float ly, float lz, float vfov,
+                        uint32_t w, uint32_t h)
 {
-    sluice_camera c = {{ex, ey, ez}, {lx, ly, lz}, {0.0f, 1.0f, 0.0f}, vfov, w, h};
+    sr_camera c = {{ex, ey, ez}, {lx, ly, lz}, {0.0f, 1.0f, 0.0f}, vfov, w, h};
     return c;
 }
 
@@ -169,27 +169,26 @@ static const float cornell_tall[5][12] = {
     {265, 0, 296, 265, 330, 296, 423, 330, 247, 423, 0, 247},
 };
 
-static sluice_status build_cornell(sluice_scene_builder *b, int area_light, char *err,
-                                   size_t err_size)
+static sluice_status build_cornell(sr_scene_builder *b, int area_light, char *err, size_t err_size)
 {
     /* Cornell's measured reflectances are spectra; these are the usual RGB
      * approximations. The light's emission (17, 12, 4) approximates its
      * published warm spectrum as RGB radiance. */
-    sluice_material white = diffuse("white", 0.73f, 0.73f, 0.73f);
-    sluice_material red = diffuse("red", 0.63f, 0.065f, 0.05f);
-    sluice_material green = diffuse("green", 0.14f, 0.45f, 0.09f);
-    sluice_material light = sluice_material_make(SLUICE_MATERIAL_EMISSIVE, "light");
+    sr_material white = diffuse("white", 0.73f, 0.73f, 0.73f);
+    sr_material red = diffuse("red", 0.63f, 0.065f, 0.05f);
+    sr_material green = diffuse("green", 0.14f, 0.45f, 0.09f);
+    sr_material light = sr_material_make(SR_MATERIAL_EMISSIVE, "light");
     light.albedo[0] = light.albedo[1] = light.albedo[2] = 0.78f;
     light.emission[0] = 17.0f;
     light.emission[1] = 12.0f;
     light.emission[2] = 4.0f;
     uint32_t mw = 0, mr = 0, mg = 0, ml = 0;
     sluice_status st = SLUICE_OK;
-    TRY(sluice_scene_builder_add_material(b, &white, &mw, err, err_size));
-    TRY(sluice_scene_builder_add_material(b, &red, &mr, err, err_size));
-    TRY(sluice_scene_builder_add_material(b, &green, &mg, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &white, &mw, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &red, &mr, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &green, &mg, err, err_size));
     if (area_light)
-        TRY(sluice_scene_builder_add_material(b, &light, &ml, err, err_size));
+        TRY(sr_scene_builder_add_material(b, &light, &ml, err, err_size));
     TRY(add_quad4(b, "floor", cornell_floor, mw, err, err_size));
     if (area_light) {
         /* The light sits in a hole in the ceiling, in the ceiling's plane, so
@@ -204,7 +203,7 @@ static sluice_status build_cornell(sluice_scene_builder *b, int area_light, char
         for (int i = 0; i < 4; ++i) {
             float c[3] = {strips[i][0], y, strips[i][1]}, u[3] = {strips[i][2], 0, 0},
                   v[3] = {0, 0, strips[i][3]};
-            TRY(sluice_scene_builder_add_quad(b, c, u, v, mw, NULL, err, err_size));
+            TRY(sr_scene_builder_add_quad(b, c, u, v, mw, NULL, err, err_size));
         }
     } else {
         TRY(add_quad4(b, "ceiling", cornell_ceiling, mw, err, err_size));
@@ -222,22 +221,21 @@ static sluice_status build_cornell(sluice_scene_builder *b, int area_light, char
         /* 10 mm below the light's centre, with the area light's radiant
          * intensity straight down (emission times area). */
         const float area = 130.0f * 105.0f;
-        sluice_point_light l = {{278.0f, 538.8f, 279.5f},
-                                {17.0f * area, 12.0f * area, 4.0f * area}};
-        TRY(sluice_scene_builder_add_point_light(b, &l, err, err_size));
+        sr_point_light l = {{278.0f, 538.8f, 279.5f}, {17.0f * area, 12.0f * area, 4.0f * area}};
+        TRY(sr_scene_builder_add_point_light(b, &l, err, err_size));
     }
     /* Cornell's camera: at (278, 273, -800) looking along +z, focal length
      * 35 mm, a 25 x 25 mm film: vfov = 2 atan(12.5 / 35) = 39.31 degrees. */
     const float vfov = (float)(2.0 * atan(0.0125 / 0.035) * 180.0 / PI);
-    sluice_camera cam = camera(278.0f, 273.0f, -800.0f, 278.0f, 273.0f, 0.0f, vfov, 512, 512);
-    TRY(sluice_scene_builder_set_camera(b, &cam, err, err_size));
-    sluice_render_settings r = sluice_render_settings_default();
+    sr_camera cam = camera(278.0f, 273.0f, -800.0f, 278.0f, 273.0f, 0.0f, vfov, 512, 512);
+    TRY(sr_scene_builder_set_camera(b, &cam, err, err_size));
+    sr_render_settings r = sr_render_settings_default();
     /* Purcell ch. 6.4: 32 light samples per pixel, 65,000 photons stored,
      * 500 sought per radiance estimate */
     r.light_samples = area_light ? 32 : 1;
     r.photons = 65000;
     r.photon_lookup = 500;
-    TRY(sluice_scene_builder_set_render_settings(b, &r, err, err_size));
+    TRY(sr_scene_builder_set_render_settings(b, &r, err, err_size));
     return st;
 }
 
@@ -245,63 +243,63 @@ static sluice_status build_cornell(sluice_scene_builder *b, int area_light, char
 /* Purcell's photon-mapping scenes                                     */
 /* ------------------------------------------------------------------ */
 
-static sluice_status build_glassball(sluice_scene_builder *b, char *err, size_t err_size)
+static sluice_status build_glassball(sr_scene_builder *b, char *err, size_t err_size)
 {
-    sluice_material floor_m = diffuse("floor", 0.7f, 0.7f, 0.7f);
-    sluice_material glass = sluice_material_make(SLUICE_MATERIAL_GLASS, "glass");
-    sluice_material light = sluice_material_make(SLUICE_MATERIAL_EMISSIVE, "light");
+    sr_material floor_m = diffuse("floor", 0.7f, 0.7f, 0.7f);
+    sr_material glass = sr_material_make(SR_MATERIAL_GLASS, "glass");
+    sr_material light = sr_material_make(SR_MATERIAL_EMISSIVE, "light");
     /* 0.36 m^2 at 3 m: about irradiance 1 on the floor below */
     light.emission[0] = light.emission[1] = light.emission[2] = 25.0f;
     uint32_t mf = 0, mg = 0, ml = 0;
     sluice_status st = SLUICE_OK;
-    TRY(sluice_scene_builder_add_material(b, &floor_m, &mf, err, err_size));
-    TRY(sluice_scene_builder_add_material(b, &glass, &mg, err, err_size));
-    TRY(sluice_scene_builder_add_material(b, &light, &ml, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &floor_m, &mf, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &glass, &mg, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &light, &ml, err, err_size));
     const float fc[3] = {-4, 0, -4}, fu[3] = {0, 0, 8}, fv[3] = {8, 0, 0};
-    TRY(sluice_scene_builder_add_quad(b, fc, fu, fv, mf, NULL, err, err_size));
+    TRY(sr_scene_builder_add_quad(b, fc, fu, fv, mf, NULL, err, err_size));
     /* The ball floats 0.3 above the floor: a ball lens of index 1.5 focuses
      * 0.75 r below its centre, so the caustic under it is nearly sharp. */
     const float center[3] = {0.0f, 0.8f, 0.0f};
-    TRY(sluice_scene_builder_add_sphere(b, center, 0.5f, 16, mg, NULL, err, err_size));
+    TRY(sr_scene_builder_add_sphere(b, center, 0.5f, 16, mg, NULL, err, err_size));
     const float lc[3] = {-0.8f, 3.0f, 0.2f}, lu[3] = {0.6f, 0, 0}, lv[3] = {0, 0, 0.6f};
-    TRY(sluice_scene_builder_add_quad(b, lc, lu, lv, ml, NULL, err, err_size));
-    sluice_camera cam = camera(0.0f, 1.6f, -4.0f, 0.0f, 0.6f, 0.0f, 40.0f, 512, 384);
-    TRY(sluice_scene_builder_set_camera(b, &cam, err, err_size));
+    TRY(sr_scene_builder_add_quad(b, lc, lu, lv, ml, NULL, err, err_size));
+    sr_camera cam = camera(0.0f, 1.6f, -4.0f, 0.0f, 0.6f, 0.0f, 40.0f, 512, 384);
+    TRY(sr_scene_builder_set_camera(b, &cam, err, err_size));
     /* Purcell ch. 6.4: 4 light samples per pixel, 5,000 photons, 32 sought */
-    sluice_render_settings r = sluice_render_settings_default();
+    sr_render_settings r = sr_render_settings_default();
     r.light_samples = 4;
     r.photons = 5000;
     r.photon_lookup = 32;
-    r.mode = SLUICE_RENDER_PHOTON;
-    TRY(sluice_scene_builder_set_render_settings(b, &r, err, err_size));
+    r.mode = SR_RENDER_PHOTON;
+    TRY(sr_scene_builder_set_render_settings(b, &r, err, err_size));
     return st;
 }
 
-static sluice_status build_ring(sluice_scene_builder *b, char *err, size_t err_size)
+static sluice_status build_ring(sr_scene_builder *b, char *err, size_t err_size)
 {
-    sluice_material floor_m = diffuse("floor", 0.7f, 0.7f, 0.7f);
-    sluice_material metal = mirror("metal", 0.95f, 0.93f, 0.88f);
+    sr_material floor_m = diffuse("floor", 0.7f, 0.7f, 0.7f);
+    sr_material metal = mirror("metal", 0.95f, 0.93f, 0.88f);
     uint32_t mf = 0, mm = 0;
     sluice_status st = SLUICE_OK;
-    TRY(sluice_scene_builder_add_material(b, &floor_m, &mf, err, err_size));
-    TRY(sluice_scene_builder_add_material(b, &metal, &mm, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &floor_m, &mf, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &metal, &mm, err, err_size));
     const float fc[3] = {-3, 0, -3}, fu[3] = {0, 0, 6}, fv[3] = {6, 0, 0};
-    TRY(sluice_scene_builder_add_quad(b, fc, fu, fv, mf, NULL, err, err_size));
+    TRY(sr_scene_builder_add_quad(b, fc, fu, fv, mf, NULL, err, err_size));
     const float center[3] = {0, 0, 0};
-    TRY(sluice_scene_builder_add_ring(b, center, 1.0f, 0.05f, 0.35f, 256, mm, NULL, err, err_size));
+    TRY(sr_scene_builder_add_ring(b, center, 1.0f, 0.05f, 0.35f, 256, mm, NULL, err, err_size));
     /* Low and to the front: rays pass over the near rim and reflect off the
      * far inner wall onto the floor inside the ring, where the reflected
      * rays' envelope is the cardioid-like caustic of a coffee cup. */
-    sluice_point_light l = {{0.0f, 0.75f, -4.0f}, {20.0f, 20.0f, 20.0f}};
-    TRY(sluice_scene_builder_add_point_light(b, &l, err, err_size));
-    sluice_camera cam = camera(0.0f, 3.2f, -2.2f, 0.0f, 0.0f, 0.2f, 45.0f, 512, 384);
-    TRY(sluice_scene_builder_set_camera(b, &cam, err, err_size));
+    sr_point_light l = {{0.0f, 0.75f, -4.0f}, {20.0f, 20.0f, 20.0f}};
+    TRY(sr_scene_builder_add_point_light(b, &l, err, err_size));
+    sr_camera cam = camera(0.0f, 3.2f, -2.2f, 0.0f, 0.0f, 0.2f, 45.0f, 512, 384);
+    TRY(sr_scene_builder_set_camera(b, &cam, err, err_size));
     /* Purcell ch. 6.4: 16,000 photons, 64 sought */
-    sluice_render_settings r = sluice_render_settings_default();
+    sr_render_settings r = sr_render_settings_default();
     r.photons = 16000;
     r.photon_lookup = 64;
-    r.mode = SLUICE_RENDER_PHOTON;
-    TRY(sluice_scene_builder_set_render_settings(b, &r, err, err_size));
+    r.mode = SR_RENDER_PHOTON;
+    TRY(sr_scene_builder_set_render_settings(b, &r, err, err_size));
     return st;
 }
 
@@ -309,7 +307,7 @@ static sluice_status build_ring(sluice_scene_builder *b, char *err, size_t err_s
 /* Teapotahedron                                                       */
 /* ------------------------------------------------------------------ */
 
-static sluice_status build_teapotahedron(sluice_scene_builder *b, char *err, size_t err_size)
+static sluice_status build_teapotahedron(sr_scene_builder *b, char *err, size_t err_size)
 {
     /* A simplified take on the cover of Glassner's "An Introduction to Ray
      * Tracing" (1989), as Purcell's TEAPOTAHEDRON is (ch. 5.3, fig. 5.9):
@@ -317,22 +315,22 @@ static sluice_status build_teapotahedron(sluice_scene_builder *b, char *err, siz
      * standing on the faces of a cube of half-size 2, spouts turning round,
      * a mirror ball in the middle, a floor to catch the shadows. Opposite
      * teapots share a material. */
-    sluice_material silver = mirror("silver", 0.9f, 0.9f, 0.9f);
-    sluice_material copper = mirror("copper", 0.95f, 0.64f, 0.54f);
-    sluice_material gold = sluice_material_make(SLUICE_MATERIAL_GLOSSY, "gold");
+    sr_material silver = mirror("silver", 0.9f, 0.9f, 0.9f);
+    sr_material copper = mirror("copper", 0.95f, 0.64f, 0.54f);
+    sr_material gold = sr_material_make(SR_MATERIAL_GLOSSY, "gold");
     const float kd[3] = {0.35f, 0.25f, 0.05f}, ks[3] = {0.6f, 0.5f, 0.25f};
     memcpy(gold.albedo, kd, sizeof kd);
     memcpy(gold.specular, ks, sizeof ks);
     gold.exponent = 200.0f;
-    sluice_material ball = mirror("ball", 0.95f, 0.95f, 0.95f);
-    sluice_material floor_m = diffuse("floor", 0.6f, 0.6f, 0.65f);
+    sr_material ball = mirror("ball", 0.95f, 0.95f, 0.95f);
+    sr_material floor_m = diffuse("floor", 0.6f, 0.6f, 0.65f);
     uint32_t ms = 0, mc = 0, mgold = 0, mb = 0, mf = 0;
     sluice_status st = SLUICE_OK;
-    TRY(sluice_scene_builder_add_material(b, &silver, &ms, err, err_size));
-    TRY(sluice_scene_builder_add_material(b, &gold, &mgold, err, err_size));
-    TRY(sluice_scene_builder_add_material(b, &copper, &mc, err, err_size));
-    TRY(sluice_scene_builder_add_material(b, &ball, &mb, err, err_size));
-    TRY(sluice_scene_builder_add_material(b, &floor_m, &mf, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &silver, &ms, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &gold, &mgold, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &copper, &mc, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &ball, &mb, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &floor_m, &mf, err, err_size));
     /* face normal d (the teapot's up) and tangent t (its spout) */
     const float faces[6][6] = {
         {1, 0, 0, 0, 0, -1}, {-1, 0, 0, 0, 0, 1}, {0, 1, 0, 1, 0, 0},
@@ -353,19 +351,19 @@ static sluice_status build_teapotahedron(sluice_scene_builder *b, char *err, siz
             m[4 * r + 3] = half * d[r];
         }
         m[15] = 1.0f;
-        TRY(sluice_scene_builder_add_teapot(b, 8, mats[f], m, err, err_size));
+        TRY(sr_scene_builder_add_teapot(b, 8, mats[f], m, err, err_size));
     }
     const float center[3] = {0, 0, 0};
-    TRY(sluice_scene_builder_add_sphere(b, center, 1.2f, 16, mb, NULL, err, err_size));
+    TRY(sr_scene_builder_add_sphere(b, center, 1.2f, 16, mb, NULL, err, err_size));
     const float fc[3] = {-8, -4, -8}, fu[3] = {0, 0, 16}, fv[3] = {16, 0, 0};
-    TRY(sluice_scene_builder_add_quad(b, fc, fu, fv, mf, NULL, err, err_size));
-    sluice_point_light l = {{5.0f, 9.0f, -7.0f}, {150.0f, 150.0f, 150.0f}};
-    TRY(sluice_scene_builder_add_point_light(b, &l, err, err_size));
-    sluice_camera cam = camera(7.0f, 5.0f, -9.0f, 0.0f, 0.0f, 0.0f, 40.0f, 512, 512);
-    TRY(sluice_scene_builder_set_camera(b, &cam, err, err_size));
-    sluice_render_settings r = sluice_render_settings_default();
-    r.mode = SLUICE_RENDER_WHITTED;
-    TRY(sluice_scene_builder_set_render_settings(b, &r, err, err_size));
+    TRY(sr_scene_builder_add_quad(b, fc, fu, fv, mf, NULL, err, err_size));
+    sr_point_light l = {{5.0f, 9.0f, -7.0f}, {150.0f, 150.0f, 150.0f}};
+    TRY(sr_scene_builder_add_point_light(b, &l, err, err_size));
+    sr_camera cam = camera(7.0f, 5.0f, -9.0f, 0.0f, 0.0f, 0.0f, 40.0f, 512, 512);
+    TRY(sr_scene_builder_set_camera(b, &cam, err, err_size));
+    sr_render_settings r = sr_render_settings_default();
+    r.mode = SR_RENDER_WHITTED;
+    TRY(sr_scene_builder_set_render_settings(b, &r, err, err_size));
     return st;
 }
 
@@ -373,29 +371,28 @@ static sluice_status build_teapotahedron(sluice_scene_builder *b, char *err, siz
 /* Bunny                                                               */
 /* ------------------------------------------------------------------ */
 
-static sluice_status build_bunny(sluice_scene_builder *b, char *err, size_t err_size)
+static sluice_status build_bunny(sr_scene_builder *b, char *err, size_t err_size)
 {
     FILE *f = fopen(BUNNY_PATH, "rb");
     if (!f) {
         int e = errno;
-        sluice_set_error(err, err_size,
-                         "bunny: cannot open " BUNNY_PATH
-                         ": %s (the bunny comes with glmark2's data: "
-                         "apt install glmark2-data)",
-                         e == ENOENT ? "no such file" : strerror(e));
+        sr_set_error(err, err_size,
+                     "bunny: cannot open " BUNNY_PATH ": %s (the bunny comes with glmark2's data: "
+                     "apt install glmark2-data)",
+                     e == ENOENT ? "no such file" : strerror(e));
         return e == ENOENT ? SLUICE_ERROR_NOT_FOUND : SLUICE_ERROR_IO;
     }
     fclose(f);
-    sluice_material m = diffuse("bunny", 0.75f, 0.75f, 0.75f);
+    sr_material m = diffuse("bunny", 0.75f, 0.75f, 0.75f);
     uint32_t mi = 0;
     sluice_status st = SLUICE_OK;
-    TRY(sluice_scene_builder_add_material(b, &m, &mi, err, err_size));
-    TRY(sluice_scene_builder_add_mesh_file(b, BUNNY_PATH, NULL, &mi, BUNNY_PATH, err, err_size));
+    TRY(sr_scene_builder_add_material(b, &m, &mi, err, err_size));
+    TRY(sr_scene_builder_add_mesh_file(b, BUNNY_PATH, NULL, &mi, BUNNY_PATH, err, err_size));
     /* The file's bunny fits [-1, 1]^3 with y up: light from above, right
      * and front (about irradiance 1 at the centre); the default camera frames
      * it from +z. */
-    sluice_point_light l = {{2.0f, 3.0f, 3.0f}, {22.0f, 22.0f, 22.0f}};
-    TRY(sluice_scene_builder_add_point_light(b, &l, err, err_size));
+    sr_point_light l = {{2.0f, 3.0f, 3.0f}, {22.0f, 22.0f, 22.0f}};
+    TRY(sr_scene_builder_add_point_light(b, &l, err, err_size));
     return st;
 }
 
@@ -414,13 +411,13 @@ static sluice_status parse_count(const char *name, const char *s, unsigned *out,
             v = v * 10 + (unsigned)(s[n] - '0');
     }
     if (n == 0 || s[n] != '\0') {
-        sluice_set_error(err, err_size, "%s: expected spheres:N with N a whole number from 1 to %u",
-                         name, SPHERES_MAX);
+        sr_set_error(err, err_size, "%s: expected spheres:N with N a whole number from 1 to %u",
+                     name, SPHERES_MAX);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (v < 1 || v > SPHERES_MAX) {
-        sluice_set_error(err, err_size, "%s: N must be from 1 to %u (at most %u triangles)", name,
-                         SPHERES_MAX, SPHERES_MAX * 20u * SPHERE_FREQUENCY * SPHERE_FREQUENCY);
+        sr_set_error(err, err_size, "%s: N must be from 1 to %u (at most %u triangles)", name,
+                     SPHERES_MAX, SPHERES_MAX * 20u * SPHERE_FREQUENCY * SPHERE_FREQUENCY);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     *out = (unsigned)v;
@@ -438,22 +435,21 @@ static double next_unit(uint32_t *s)
     return (double)(x >> 8) / 16777216.0;
 }
 
-static sluice_status build_spheres(sluice_scene_builder *b, unsigned count, char *err,
-                                   size_t err_size)
+static sluice_status build_spheres(sr_scene_builder *b, unsigned count, char *err, size_t err_size)
 {
-    sluice_material mats[7] = {
+    sr_material mats[7] = {
         diffuse("red", 0.7f, 0.15f, 0.1f),
         diffuse("green", 0.15f, 0.6f, 0.15f),
         diffuse("blue", 0.1f, 0.2f, 0.7f),
         diffuse("white", 0.75f, 0.75f, 0.75f),
         mirror("mirror", 0.9f, 0.9f, 0.9f),
-        sluice_material_make(SLUICE_MATERIAL_GLASS, "glass"),
-        sluice_material_make(SLUICE_MATERIAL_GLOSSY, "glossy"),
+        sr_material_make(SR_MATERIAL_GLASS, "glass"),
+        sr_material_make(SR_MATERIAL_GLOSSY, "glossy"),
     };
     uint32_t ids[7] = {0};
     sluice_status st = SLUICE_OK;
     for (int i = 0; i < 7; ++i)
-        TRY(sluice_scene_builder_add_material(b, &mats[i], &ids[i], err, err_size));
+        TRY(sr_scene_builder_add_material(b, &mats[i], &ids[i], err, err_size));
     /* the smallest cube grid that holds them, one sphere per unit cell:
      * centres jittered by up to 0.15 and radii in [0.25, 0.35), so spheres
      * never touch */
@@ -467,16 +463,16 @@ static sluice_status build_spheres(sluice_scene_builder *b, unsigned count, char
                       (float)(cy + 0.5 + 0.3 * (next_unit(&seed) - 0.5)),
                       (float)(cz + 0.5 + 0.3 * (next_unit(&seed) - 0.5))};
         float r = (float)(0.25 + 0.1 * next_unit(&seed));
-        st = sluice_scene_builder_add_sphere(b, c, r, SPHERE_FREQUENCY, ids[i % 7], NULL, err,
-                                             err_size);
+        st =
+            sr_scene_builder_add_sphere(b, c, r, SPHERE_FREQUENCY, ids[i % 7], NULL, err, err_size);
     }
     /* above, right and in front of the grid, irradiance about 1 at its
      * centre; the default camera frames the grid from the front */
     double h = 0.5 * g, d[3] = {0.5 * (g + 1), 1.2 * (g + 1), 1.0 * (g + 1)};
     double dist2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    sluice_point_light l = {{(float)(h + d[0]), (float)(h + d[1]), (float)(h + d[2])},
-                            {(float)dist2, (float)dist2, (float)dist2}};
-    TRY(sluice_scene_builder_add_point_light(b, &l, err, err_size));
+    sr_point_light l = {{(float)(h + d[0]), (float)(h + d[1]), (float)(h + d[2])},
+                        {(float)dist2, (float)dist2, (float)dist2}};
+    TRY(sr_scene_builder_add_point_light(b, &l, err, err_size));
     return st;
 }
 
@@ -484,11 +480,11 @@ static sluice_status build_spheres(sluice_scene_builder *b, unsigned count, char
 /* Entry points                                                        */
 /* ------------------------------------------------------------------ */
 
-sluice_status sluice_scene_load_builtin(const char *name, const sluice_scene_load_options *opts,
-                                        sluice_scene **out, char *err, size_t err_size)
+sluice_status sr_scene_load_builtin(const char *name, const sr_scene_load_options *opts,
+                                    sr_scene **out, char *err, size_t err_size)
 {
     if (!out || !name) {
-        sluice_set_error(err, err_size, "load_builtin: invalid argument");
+        sr_set_error(err, err_size, "load_builtin: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     *out = NULL;
@@ -497,19 +493,19 @@ sluice_status sluice_scene_load_builtin(const char *name, const sluice_scene_loa
         sluice_status st = parse_count(name, name + 8, &count, err, err_size);
         if (st != SLUICE_OK)
             return st;
-    } else if (!sluice_scene_is_builtin(name)) {
-        sluice_set_error(err, err_size,
-                         "%s: no such built-in scene (sluice-scene --list names them)", name);
+    } else if (!sr_scene_is_builtin(name)) {
+        sr_set_error(err, err_size, "%s: no such built-in scene (sluice-scene --list names them)",
+                     name);
         return SLUICE_ERROR_NOT_FOUND;
     }
-    sluice_scene_builder *b = NULL;
-    if (sluice_scene_builder_create(name, &b) != SLUICE_OK) {
-        sluice_set_error(err, err_size, "%s: out of memory", name);
+    sr_scene_builder *b = NULL;
+    if (sr_scene_builder_create(name, &b) != SLUICE_OK) {
+        sr_set_error(err, err_size, "%s: out of memory", name);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     unsigned flags = 0;
     if (opts) {
-        sluice_scene_builder_set_warning_callback(b, opts->warning, opts->warning_user);
+        sr_scene_builder_set_warning_callback(b, opts->warning, opts->warning_user);
         flags = opts->flags;
     }
     sluice_status st;
@@ -530,8 +526,8 @@ sluice_status sluice_scene_load_builtin(const char *name, const sluice_scene_loa
     else
         st = build_spheres(b, count, err, err_size);
     if (st == SLUICE_OK)
-        st = sluice_scene_builder_finish(b, flags, out, err, err_size);
-    sluice_scene_builder_destroy(b);
+        st = sr_scene_builder_finish(b, flags, out, err, err_size);
+    sr_scene_builder_destroy(b);
     return st;
 }
 
@@ -551,18 +547,18 @@ static int ends_with_json(const char *s)
     return 1;
 }
 
-sluice_status sluice_scene_load(const char *name_or_path, const sluice_scene_load_options *opts,
-                                sluice_scene **out, char *err, size_t err_size)
+sluice_status sr_scene_load(const char *name_or_path, const sr_scene_load_options *opts,
+                            sr_scene **out, char *err, size_t err_size)
 {
     if (out)
         *out = NULL;
     if (!out || !name_or_path || !*name_or_path) {
-        sluice_set_error(err, err_size, "load: needs a scene name or a file");
+        sr_set_error(err, err_size, "load: needs a scene name or a file");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
-    if (sluice_scene_is_builtin(name_or_path))
-        return sluice_scene_load_builtin(name_or_path, opts, out, err, err_size);
+    if (sr_scene_is_builtin(name_or_path))
+        return sr_scene_load_builtin(name_or_path, opts, out, err, err_size);
     if (ends_with_json(name_or_path))
-        return sluice_scene_load_json(name_or_path, opts, out, err, err_size);
-    return sluice_scene_load_mesh(name_or_path, opts, out, err, err_size);
+        return sr_scene_load_json(name_or_path, opts, out, err, err_size);
+    return sr_scene_load_mesh(name_or_path, opts, out, err, err_size);
 }

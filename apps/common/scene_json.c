@@ -25,7 +25,7 @@ static const double PI = 3.14159265358979323846;
 typedef struct jctx {
     const char *file; /* as given, for messages */
     char *dir;        /* directory of the file, for relative mesh paths ("" = cwd) */
-    sluice_scene_builder *b;
+    sr_scene_builder *b;
     int have_default;
     uint32_t default_material;
     char *err;
@@ -40,7 +40,7 @@ static sluice_status jfail(const jctx *c, const char *path, const char *fmt, ...
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    sluice_set_error(c->err, c->err_size, "%s: %s: %s", c->file, path, msg);
+    sr_set_error(c->err, c->err_size, "%s: %s: %s", c->file, path, msg);
     return SLUICE_ERROR_INVALID_ARGUMENT;
 }
 
@@ -231,19 +231,19 @@ static sluice_status parse_material(jctx *c, const cJSON *v, const char *path)
         st = require(c, v, "kind", path);
     if (st != SLUICE_OK)
         return st;
-    if (strlen(v->string) >= SLUICE_MATERIAL_NAME_SIZE)
-        return jfail(c, path, "name longer than %d characters", SLUICE_MATERIAL_NAME_SIZE - 1);
-    if (sluice_scene_builder_find_material(c->b, v->string, NULL) == SLUICE_OK)
+    if (strlen(v->string) >= SR_MATERIAL_NAME_SIZE)
+        return jfail(c, path, "name longer than %d characters", SR_MATERIAL_NAME_SIZE - 1);
+    if (sr_scene_builder_find_material(c->b, v->string, NULL) == SLUICE_OK)
         return jfail(c, path, "material defined twice");
     const cJSON *kind = cJSON_GetObjectItemCaseSensitive(v, "kind");
     char p[256];
     sub(p, sizeof p, path, "kind");
-    sluice_material_kind k;
-    if (!cJSON_IsString(kind) || sluice_material_kind_parse(kind->valuestring, &k) != SLUICE_OK)
+    sr_material_kind k;
+    if (!cJSON_IsString(kind) || sr_material_kind_parse(kind->valuestring, &k) != SLUICE_OK)
         return jfail(c, p,
                      "expected one of \"diffuse\", \"mirror\", \"glass\", \"glossy\", "
                      "\"emissive\"");
-    sluice_material m = sluice_material_make(k, v->string);
+    sr_material m = sr_material_make(k, v->string);
     double d;
     int found;
     if ((st = get_color(c, v, "albedo", path, m.albedo)) != SLUICE_OK ||
@@ -259,7 +259,7 @@ static sluice_status parse_material(jctx *c, const cJSON *v, const char *path)
     if (found)
         m.ior = (float)d;
     char msg[512], prefix[256];
-    st = sluice_scene_builder_add_material(c->b, &m, NULL, msg, sizeof msg);
+    st = sr_scene_builder_add_material(c->b, &m, NULL, msg, sizeof msg);
     if (st != SLUICE_OK) {
         /* the builder says "FILE: material 'NAME': what"; say "FILE: PATH: what" */
         snprintf(prefix, sizeof prefix, "%s: material '%s': ", c->file, m.name);
@@ -402,10 +402,10 @@ static sluice_status parse_transform(jctx *c, const cJSON *v, const char *path, 
 static sluice_status default_material(jctx *c, uint32_t *out)
 {
     if (!c->have_default &&
-        sluice_scene_builder_find_material(c->b, "default", &c->default_material) != SLUICE_OK) {
-        sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, "default");
+        sr_scene_builder_find_material(c->b, "default", &c->default_material) != SLUICE_OK) {
+        sr_material m = sr_material_make(SR_MATERIAL_DIFFUSE, "default");
         sluice_status st =
-            sluice_scene_builder_add_material(c->b, &m, &c->default_material, c->err, c->err_size);
+            sr_scene_builder_add_material(c->b, &m, &c->default_material, c->err, c->err_size);
         if (st != SLUICE_OK)
             return st;
     }
@@ -421,7 +421,7 @@ static sluice_status wrap(const jctx *c, const char *path, sluice_status st, con
     size_t fl = strlen(c->file);
     if (strncmp(msg, c->file, fl) == 0 && msg[fl] == ':' && msg[fl + 1] == ' ')
         msg += fl + 2;
-    sluice_set_error(c->err, c->err_size, "%s: %s: %s", c->file, path, msg);
+    sr_set_error(c->err, c->err_size, "%s: %s: %s", c->file, path, msg);
     return st;
 }
 
@@ -447,8 +447,8 @@ static sluice_status parse_shape(jctx *c, const cJSON *v, const char *path, cons
             sub(p, sizeof p, path, "radius");
             return jfail(c, p, "must be > 0");
         }
-        st = sluice_scene_builder_add_sphere(c->b, center, (float)radius, subdiv, material, xf, msg,
-                                             sizeof msg);
+        st = sr_scene_builder_add_sphere(c->b, center, (float)radius, subdiv, material, xf, msg,
+                                         sizeof msg);
     } else if (strcmp(shape, "quad") == 0) {
         static const char *const f[] = {"shape",    "corner",    "u",    "v",
                                         "material", "transform", "name", NULL};
@@ -460,7 +460,7 @@ static sluice_status parse_shape(jctx *c, const cJSON *v, const char *path, cons
             (st = get_vec3(c, v, "u", path, u, NULL)) != SLUICE_OK ||
             (st = get_vec3(c, v, "v", path, w, NULL)) != SLUICE_OK)
             return st;
-        st = sluice_scene_builder_add_quad(c->b, corner, u, w, material, xf, msg, sizeof msg);
+        st = sr_scene_builder_add_quad(c->b, corner, u, w, material, xf, msg, sizeof msg);
     } else if (strcmp(shape, "box") == 0) {
         static const char *const f[] = {"shape",     "min",  "max", "material",
                                         "transform", "name", NULL};
@@ -471,7 +471,7 @@ static sluice_status parse_shape(jctx *c, const cJSON *v, const char *path, cons
             (st = get_vec3(c, v, "min", path, lo, NULL)) != SLUICE_OK ||
             (st = get_vec3(c, v, "max", path, hi, NULL)) != SLUICE_OK)
             return st;
-        st = sluice_scene_builder_add_box(c->b, lo, hi, material, xf, msg, sizeof msg);
+        st = sr_scene_builder_add_box(c->b, lo, hi, material, xf, msg, sizeof msg);
     } else if (strcmp(shape, "ring") == 0) {
         static const char *const f[] = {"shape",    "center",   "radius",    "thickness", "height",
                                         "segments", "material", "transform", "name",      NULL};
@@ -484,15 +484,15 @@ static sluice_status parse_shape(jctx *c, const cJSON *v, const char *path, cons
             (st = get_number(c, v, "height", path, &height, NULL)) != SLUICE_OK ||
             (st = get_uint(c, v, "segments", path, 3, 65536, &segments)) != SLUICE_OK)
             return st;
-        st = sluice_scene_builder_add_ring(c->b, center, (float)radius, (float)thickness,
-                                           (float)height, segments, material, xf, msg, sizeof msg);
+        st = sr_scene_builder_add_ring(c->b, center, (float)radius, (float)thickness, (float)height,
+                                       segments, material, xf, msg, sizeof msg);
     } else if (strcmp(shape, "teapot") == 0) {
         static const char *const f[] = {"shape", "subdiv", "material", "transform", "name", NULL};
         uint32_t subdiv = 8;
         if ((st = check_fields(c, v, path, f)) != SLUICE_OK ||
             (st = get_uint(c, v, "subdiv", path, 2, 64, &subdiv)) != SLUICE_OK)
             return st;
-        st = sluice_scene_builder_add_teapot(c->b, subdiv, material, xf, msg, sizeof msg);
+        st = sr_scene_builder_add_teapot(c->b, subdiv, material, xf, msg, sizeof msg);
     } else {
         return jfail(c, p,
                      "unknown shape '%s' (expected \"sphere\", \"quad\", \"box\", \"ring\" or "
@@ -533,7 +533,7 @@ static sluice_status parse_mesh(jctx *c, const cJSON *v, const char *path)
         sub(p, sizeof p, path, "material");
         if (!cJSON_IsString(mat))
             return jfail(c, p, "expected a material name, got %s", type_name(mat));
-        if (sluice_scene_builder_find_material(c->b, mat->valuestring, &material) != SLUICE_OK)
+        if (sr_scene_builder_find_material(c->b, mat->valuestring, &material) != SLUICE_OK)
             return jfail(c, p, "no material named '%s' in \"materials\"", mat->valuestring);
         have_material = 1;
     }
@@ -555,7 +555,7 @@ static sluice_status parse_mesh(jctx *c, const cJSON *v, const char *path)
     size_t n = strlen(c->dir) + strlen(fn) + 2;
     char *full = malloc(n);
     if (!full) {
-        sluice_set_error(c->err, c->err_size, "%s: out of memory", c->file);
+        sr_set_error(c->err, c->err_size, "%s: out of memory", c->file);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     if (fn[0] == '/' || !c->dir[0])
@@ -563,8 +563,8 @@ static sluice_status parse_mesh(jctx *c, const cJSON *v, const char *path)
     else
         snprintf(full, n, "%s/%s", c->dir, fn);
     char msg[768];
-    st = sluice_scene_builder_add_mesh_file(c->b, full, xfp, have_material ? &material : NULL, full,
-                                            msg, sizeof msg);
+    st = sr_scene_builder_add_mesh_file(c->b, full, xfp, have_material ? &material : NULL, full,
+                                        msg, sizeof msg);
     free(full);
     return st == SLUICE_OK ? st : wrap(c, p, st, msg);
 }
@@ -587,12 +587,12 @@ static sluice_status parse_light(jctx *c, const cJSON *v, const char *path)
         sub(p, sizeof p, path, "type");
         return jfail(c, p, "expected \"point\" (area lights are meshes with an emissive material)");
     }
-    sluice_point_light l;
+    sr_point_light l;
     if ((st = get_vec3(c, v, "position", path, l.position, NULL)) != SLUICE_OK ||
         (st = get_color(c, v, "intensity", path, l.intensity)) != SLUICE_OK)
         return st;
     char msg[512];
-    st = sluice_scene_builder_add_point_light(c->b, &l, msg, sizeof msg);
+    st = sr_scene_builder_add_point_light(c->b, &l, msg, sizeof msg);
     return st == SLUICE_OK ? st : wrap(c, path, st, msg);
 }
 
@@ -608,7 +608,7 @@ static sluice_status parse_camera(jctx *c, const cJSON *v, const char *path)
         st = require(c, v, "look_at", path);
     if (st != SLUICE_OK)
         return st;
-    sluice_camera cam;
+    sr_camera cam;
     memset(&cam, 0, sizeof cam);
     cam.up[1] = 1.0f;
     cam.width = cam.height = 512;
@@ -617,10 +617,8 @@ static sluice_status parse_camera(jctx *c, const cJSON *v, const char *path)
         (st = get_vec3(c, v, "look_at", path, cam.look_at, NULL)) != SLUICE_OK ||
         (st = get_vec3(c, v, "up", path, cam.up, NULL)) != SLUICE_OK ||
         (st = get_number(c, v, "vfov", path, &vfov, NULL)) != SLUICE_OK ||
-        (st = get_uint(c, v, "width", path, 1, SLUICE_SCENE_MAX_IMAGE_SIDE, &cam.width)) !=
-            SLUICE_OK ||
-        (st = get_uint(c, v, "height", path, 1, SLUICE_SCENE_MAX_IMAGE_SIDE, &cam.height)) !=
-            SLUICE_OK)
+        (st = get_uint(c, v, "width", path, 1, SR_SCENE_MAX_IMAGE_SIDE, &cam.width)) != SLUICE_OK ||
+        (st = get_uint(c, v, "height", path, 1, SR_SCENE_MAX_IMAGE_SIDE, &cam.height)) != SLUICE_OK)
         return st;
     if (!(vfov > 0.0 && vfov < 180.0)) {
         char p[256];
@@ -629,7 +627,7 @@ static sluice_status parse_camera(jctx *c, const cJSON *v, const char *path)
     }
     cam.vfov = (float)vfov;
     char msg[512];
-    st = sluice_scene_builder_set_camera(c->b, &cam, msg, sizeof msg);
+    st = sr_scene_builder_set_camera(c->b, &cam, msg, sizeof msg);
     return st == SLUICE_OK ? st : wrap(c, path, st, msg);
 }
 
@@ -642,7 +640,7 @@ static sluice_status parse_render(jctx *c, const cJSON *v, const char *path)
         st = check_fields(c, v, path, f);
     if (st != SLUICE_OK)
         return st;
-    sluice_render_settings r = sluice_render_settings_default();
+    sr_render_settings r = sr_render_settings_default();
     const double big = 4294967295.0;
     if ((st = get_uint(c, v, "spp", path, 1, 1 << 20, &r.samples_per_pixel)) != SLUICE_OK ||
         (st = get_uint(c, v, "max_depth", path, 0, 1024, &r.max_depth)) != SLUICE_OK ||
@@ -651,8 +649,8 @@ static sluice_status parse_render(jctx *c, const cJSON *v, const char *path)
         (st = get_uint(c, v, "photon_lookup", path, 0, big, &r.photon_lookup)) != SLUICE_OK)
         return st;
     const cJSON *mode = cJSON_GetObjectItemCaseSensitive(v, "mode");
-    if (mode && (!cJSON_IsString(mode) ||
-                 sluice_render_mode_parse(mode->valuestring, &r.mode) != SLUICE_OK)) {
+    if (mode &&
+        (!cJSON_IsString(mode) || sr_render_mode_parse(mode->valuestring, &r.mode) != SLUICE_OK)) {
         char p[256];
         sub(p, sizeof p, path, "mode");
         return jfail(c, p,
@@ -660,7 +658,7 @@ static sluice_status parse_render(jctx *c, const cJSON *v, const char *path)
                      "\"photon\"");
     }
     char msg[512];
-    st = sluice_scene_builder_set_render_settings(c->b, &r, msg, sizeof msg);
+    st = sr_scene_builder_set_render_settings(c->b, &r, msg, sizeof msg);
     return st == SLUICE_OK ? st : wrap(c, path, st, msg);
 }
 
@@ -669,8 +667,8 @@ static sluice_status parse_scene(jctx *c, const cJSON *root)
     static const char *const f[] = {"description", "materials", "meshes", "lights",
                                     "camera",      "render",    NULL};
     if (!cJSON_IsObject(root)) {
-        sluice_set_error(c->err, c->err_size, "%s: expected a JSON object at the top, got %s",
-                         c->file, type_name(root));
+        sr_set_error(c->err, c->err_size, "%s: expected a JSON object at the top, got %s", c->file,
+                     type_name(root));
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     sluice_status st = check_fields(c, root, "", f);
@@ -720,8 +718,8 @@ static sluice_status read_file(const char *path, char **out, size_t *len, char *
     FILE *f = fopen(path, "rb");
     if (!f) {
         int e = errno;
-        sluice_set_error(err, err_size, "%s: cannot open: %s", path,
-                         e == ENOENT ? "no such file" : strerror(e));
+        sr_set_error(err, err_size, "%s: cannot open: %s", path,
+                     e == ENOENT ? "no such file" : strerror(e));
         return e == ENOENT ? SLUICE_ERROR_NOT_FOUND : SLUICE_ERROR_IO;
     }
     size_t cap = 1 << 16, n = 0;
@@ -752,10 +750,10 @@ static sluice_status read_file(const char *path, char **out, size_t *len, char *
     fclose(f);
     if (st != SLUICE_OK) {
         free(buf);
-        sluice_set_error(err, err_size, "%s: %s", path,
-                         st == SLUICE_ERROR_LIMIT ? "larger than 64 MiB: not a scene file"
-                         : st == SLUICE_ERROR_IO  ? "read error"
-                                                  : "out of memory");
+        sr_set_error(err, err_size, "%s: %s", path,
+                     st == SLUICE_ERROR_LIMIT ? "larger than 64 MiB: not a scene file"
+                     : st == SLUICE_ERROR_IO  ? "read error"
+                                              : "out of memory");
         return st;
     }
     buf[n] = '\0';
@@ -764,11 +762,11 @@ static sluice_status read_file(const char *path, char **out, size_t *len, char *
     return SLUICE_OK;
 }
 
-sluice_status sluice_scene_load_json(const char *path, const sluice_scene_load_options *opts,
-                                     sluice_scene **out, char *err, size_t err_size)
+sluice_status sr_scene_load_json(const char *path, const sr_scene_load_options *opts,
+                                 sr_scene **out, char *err, size_t err_size)
 {
     if (!out || !path) {
-        sluice_set_error(err, err_size, "load_json: invalid argument");
+        sr_set_error(err, err_size, "load_json: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     *out = NULL;
@@ -794,9 +792,9 @@ sluice_status sluice_scene_load_json(const char *path, const sluice_scene_load_o
         for (; k + 1 < sizeof near && off + k < len && text[off + k] != '\n'; ++k)
             near[k] = text[off + k];
         near[k] = '\0';
-        sluice_set_error(err, err_size,
-                         "%s: line %zu, column %zu (byte %zu): JSON syntax error near '%s'", path,
-                         line, col, off, off >= len ? "end of file" : near);
+        sr_set_error(err, err_size,
+                     "%s: line %zu, column %zu (byte %zu): JSON syntax error near '%s'", path, line,
+                     col, off, off >= len ? "end of file" : near);
         free(text);
         return SLUICE_ERROR_IO;
     }
@@ -810,10 +808,10 @@ sluice_status sluice_scene_load_json(const char *path, const sluice_scene_load_o
     const char *slash = strrchr(path, '/');
     size_t dl = slash ? (size_t)(slash - path) : 0;
     c.dir = malloc(dl + 2);
-    if (!c.dir || sluice_scene_builder_create(path, &c.b) != SLUICE_OK) {
+    if (!c.dir || sr_scene_builder_create(path, &c.b) != SLUICE_OK) {
         free(c.dir);
         cJSON_Delete(root);
-        sluice_set_error(err, err_size, "%s: out of memory", path);
+        sr_set_error(err, err_size, "%s: out of memory", path);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     if (slash && dl == 0)
@@ -822,13 +820,13 @@ sluice_status sluice_scene_load_json(const char *path, const sluice_scene_load_o
         snprintf(c.dir, dl + 1, "%s", path);
     unsigned flags = 0;
     if (opts) {
-        sluice_scene_builder_set_warning_callback(c.b, opts->warning, opts->warning_user);
+        sr_scene_builder_set_warning_callback(c.b, opts->warning, opts->warning_user);
         flags = opts->flags;
     }
     st = parse_scene(&c, root);
     if (st == SLUICE_OK)
-        st = sluice_scene_builder_finish(c.b, flags, out, err, err_size);
-    sluice_scene_builder_destroy(c.b);
+        st = sr_scene_builder_finish(c.b, flags, out, err, err_size);
+    sr_scene_builder_destroy(c.b);
     free(c.dir);
     cJSON_Delete(root);
     return st;

@@ -26,7 +26,7 @@
 
 /* State of one file being added. */
 typedef struct mesh_file {
-    sluice_scene_builder *b;
+    sr_scene_builder *b;
     const struct aiScene *scene;
     const char *label;
     const uint32_t *override; /* material for everything, or NULL */
@@ -64,15 +64,14 @@ static float get_float(const struct aiMaterial *am, const char *key, unsigned ty
 }
 
 /* Maps an assimp material (OBJ/MTL terms in the comments) to ours; the rules
- * are listed at sluice_scene_builder_add_mesh_file. */
-static sluice_material map_material(sluice_scene_builder *b, const char *label,
-                                    const struct aiMaterial *am)
+ * are listed at sr_scene_builder_add_mesh_file. */
+static sr_material map_material(sr_scene_builder *b, const char *label, const struct aiMaterial *am)
 {
     struct aiString name;
     name.length = 0;
     name.data[0] = '\0';
     aiGetMaterialString(am, AI_MATKEY_NAME, &name);
-    sluice_material m = sluice_material_make(SLUICE_MATERIAL_DIFFUSE, name.data);
+    sr_material m = sr_material_make(SR_MATERIAL_DIFFUSE, name.data);
     float kd[3], ks[3], ke[3], tf[3];
     get_color(am, AI_MATKEY_COLOR_DIFFUSE, kd, 0.8f);
     get_color(am, AI_MATKEY_COLOR_SPECULAR, ks, 0.0f);
@@ -93,20 +92,20 @@ static sluice_material map_material(sluice_scene_builder *b, const char *label,
     int black_ks = !(max3(ks) > 0.0f);
     switch (illum) {
     case -1: /* not an OBJ: glossy when it has a specular lobe */
-        m.kind = !black_ks && ns > 0.0f ? SLUICE_MATERIAL_GLOSSY : SLUICE_MATERIAL_DIFFUSE;
+        m.kind = !black_ks && ns > 0.0f ? SR_MATERIAL_GLOSSY : SR_MATERIAL_DIFFUSE;
         break;
     case 0:
     case 1:
     case 10:
-        m.kind = SLUICE_MATERIAL_DIFFUSE;
+        m.kind = SR_MATERIAL_DIFFUSE;
         break;
     case 2:
-        m.kind = black_ks ? SLUICE_MATERIAL_DIFFUSE : SLUICE_MATERIAL_GLOSSY;
+        m.kind = black_ks ? SR_MATERIAL_DIFFUSE : SR_MATERIAL_GLOSSY;
         break;
     case 3:
     case 5:
     case 8:
-        m.kind = SLUICE_MATERIAL_MIRROR;
+        m.kind = SR_MATERIAL_MIRROR;
         if (black_ks)
             m.specular[0] = m.specular[1] = m.specular[2] = 1.0f;
         break;
@@ -114,22 +113,22 @@ static sluice_material map_material(sluice_scene_builder *b, const char *label,
     case 6:
     case 7:
     case 9:
-        m.kind = SLUICE_MATERIAL_GLASS;
+        m.kind = SR_MATERIAL_GLASS;
         memcpy(m.specular, tf, sizeof tf);
         if (ni == 1.0f)
-            sluice_scene_builder_warn(b,
-                                      "%s: material '%s': glass with index of refraction 1 "
-                                      "refracts nothing (Ni missing?)",
-                                      label, m.name);
+            sr_scene_builder_warn(b,
+                                  "%s: material '%s': glass with index of refraction 1 "
+                                  "refracts nothing (Ni missing?)",
+                                  label, m.name);
         break;
     default:
-        m.kind = SLUICE_MATERIAL_DIFFUSE;
-        sluice_scene_builder_warn(b, "%s: material '%s': unknown illum %d, taken as diffuse", label,
-                                  m.name, illum);
+        m.kind = SR_MATERIAL_DIFFUSE;
+        sr_scene_builder_warn(b, "%s: material '%s': unknown illum %d, taken as diffuse", label,
+                              m.name, illum);
         break;
     }
     if (max3(ke) > 0.0f) {
-        m.kind = SLUICE_MATERIAL_EMISSIVE;
+        m.kind = SR_MATERIAL_EMISSIVE;
         memcpy(m.emission, ke, sizeof ke);
     }
     return m;
@@ -142,14 +141,13 @@ static sluice_status material_for(mesh_file *f, unsigned ai_index, uint32_t *out
         return SLUICE_OK;
     }
     if (ai_index >= f->scene->mNumMaterials) {
-        sluice_set_error(f->err, f->err_size, "%s: material index %u out of range", f->label,
-                         ai_index);
+        sr_set_error(f->err, f->err_size, "%s: material index %u out of range", f->label, ai_index);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (f->material_map[ai_index] == UINT32_MAX) {
-        sluice_material m = map_material(f->b, f->label, f->scene->mMaterials[ai_index]);
-        sluice_status st = sluice_scene_builder_add_material(f->b, &m, &f->material_map[ai_index],
-                                                             f->err, f->err_size);
+        sr_material m = map_material(f->b, f->label, f->scene->mMaterials[ai_index]);
+        sluice_status st = sr_scene_builder_add_material(f->b, &m, &f->material_map[ai_index],
+                                                         f->err, f->err_size);
         if (st != SLUICE_OK)
             return st;
     }
@@ -181,7 +179,7 @@ static sluice_status add_one_mesh(mesh_file *f, unsigned mi, const double *xf)
         free(pos);
         free(nrm);
         free(idx);
-        sluice_set_error(f->err, f->err_size, "%s: out of memory", f->label);
+        sr_set_error(f->err, f->err_size, "%s: out of memory", f->label);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     for (size_t i = 0; i < nv; ++i) {
@@ -212,7 +210,7 @@ static sluice_status add_one_mesh(mesh_file *f, unsigned mi, const double *xf)
     char source[1600]; /* aiString holds up to 1024 bytes */
     int r = snprintf(source, sizeof source, "%s: mesh %u '%s'", f->label, mi, am->mName.data);
     (void)r; /* a long name is cut short: it only names the mesh in messages */
-    sluice_mesh_desc d;
+    sr_mesh_desc d;
     memset(&d, 0, sizeof d);
     d.source = source;
     d.positions = pos;
@@ -223,7 +221,7 @@ static sluice_status add_one_mesh(mesh_file *f, unsigned mi, const double *xf)
     d.transform = m;
     sluice_status st = material_for(f, am->mMaterialIndex, &d.material);
     if (st == SLUICE_OK)
-        st = sluice_scene_builder_add_mesh(f->b, &d, f->err, f->err_size);
+        st = sr_scene_builder_add_mesh(f->b, &d, f->err, f->err_size);
     free(pos);
     free(nrm);
     free(idx);
@@ -234,8 +232,8 @@ static sluice_status add_node(mesh_file *f, const struct aiNode *node, const dou
                               int depth)
 {
     if (depth > MAX_NODE_DEPTH) {
-        sluice_set_error(f->err, f->err_size, "%s: node hierarchy deeper than %d", f->label,
-                         MAX_NODE_DEPTH);
+        sr_set_error(f->err, f->err_size, "%s: node hierarchy deeper than %d", f->label,
+                     MAX_NODE_DEPTH);
         return SLUICE_ERROR_LIMIT;
     }
     const struct aiMatrix4x4 *t = &node->mTransformation;
@@ -246,8 +244,8 @@ static sluice_status add_node(mesh_file *f, const struct aiNode *node, const dou
     mat_mul(parent, local, global);
     for (unsigned i = 0; i < node->mNumMeshes; ++i) {
         if (node->mMeshes[i] >= f->scene->mNumMeshes) {
-            sluice_set_error(f->err, f->err_size, "%s: node '%s' names mesh %u of %u", f->label,
-                             node->mName.data, node->mMeshes[i], f->scene->mNumMeshes);
+            sr_set_error(f->err, f->err_size, "%s: node '%s' names mesh %u of %u", f->label,
+                         node->mName.data, node->mMeshes[i], f->scene->mNumMeshes);
             return SLUICE_ERROR_INVALID_ARGUMENT;
         }
         sluice_status st = add_one_mesh(f, node->mMeshes[i], global);
@@ -287,24 +285,23 @@ static sluice_status check_finite(const struct aiScene *sc, const char *label, c
             }
             /* assimp numbers vertices per face corner, not by the file's
              * vertex list: name the face too */
-            sluice_set_error(
-                err, err_size,
-                "%s: mesh %u '%s': face %ld, corner %d (vertex %u): coordinate %c is %s "
-                "(%g, %g, %g)",
-                label, mi, am->mName.data, face, corner, v, "xyz"[k],
-                isnan(c[k]) ? "NaN" : "infinite", c[0], c[1], c[2]);
+            sr_set_error(err, err_size,
+                         "%s: mesh %u '%s': face %ld, corner %d (vertex %u): coordinate %c is %s "
+                         "(%g, %g, %g)",
+                         label, mi, am->mName.data, face, corner, v, "xyz"[k],
+                         isnan(c[k]) ? "NaN" : "infinite", c[0], c[1], c[2]);
             return SLUICE_ERROR_INVALID_ARGUMENT;
         }
     }
     return SLUICE_OK;
 }
 
-sluice_status sluice_scene_builder_add_mesh_file(sluice_scene_builder *b, const char *path,
-                                                 const float *transform, const uint32_t *material,
-                                                 const char *label, char *err, size_t err_size)
+sluice_status sr_scene_builder_add_mesh_file(sr_scene_builder *b, const char *path,
+                                             const float *transform, const uint32_t *material,
+                                             const char *label, char *err, size_t err_size)
 {
     if (!b || !path) {
-        sluice_set_error(err, err_size, "add_mesh_file: invalid argument");
+        sr_set_error(err, err_size, "add_mesh_file: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     if (!label)
@@ -313,19 +310,19 @@ sluice_status sluice_scene_builder_add_mesh_file(sluice_scene_builder *b, const 
     FILE *probe = fopen(path, "rb");
     if (!probe) {
         int e = errno;
-        sluice_set_error(err, err_size, "%s: cannot open: %s", label,
-                         e == ENOENT ? "no such file" : strerror(e));
+        sr_set_error(err, err_size, "%s: cannot open: %s", label,
+                     e == ENOENT ? "no such file" : strerror(e));
         return e == ENOENT ? SLUICE_ERROR_NOT_FOUND : SLUICE_ERROR_IO;
     }
     fclose(probe);
-    if (material && *material >= sluice_scene_builder_material_count(b)) {
-        sluice_set_error(err, err_size, "%s: material %u out of range", label, *material);
+    if (material && *material >= sr_scene_builder_material_count(b)) {
+        sr_set_error(err, err_size, "%s: material %u out of range", label, *material);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
 
     struct aiPropertyStore *props = aiCreatePropertyStore();
     if (!props) {
-        sluice_set_error(err, err_size, "%s: out of memory", label);
+        sr_set_error(err, err_size, "%s: out of memory", label);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     /* SortByPType splits meshes by primitive type and, with this property,
@@ -336,7 +333,7 @@ sluice_status sluice_scene_builder_add_mesh_file(sluice_scene_builder *b, const 
         path, aiProcess_Triangulate | aiProcess_SortByPType, NULL, props);
     aiReleasePropertyStore(props);
     if (!sc) {
-        sluice_set_error(err, err_size, "%s: assimp cannot read it: %s", label, aiGetErrorString());
+        sr_set_error(err, err_size, "%s: assimp cannot read it: %s", label, aiGetErrorString());
         return SLUICE_ERROR_IO;
     }
     sluice_status st = check_finite(sc, label, err, err_size);
@@ -347,14 +344,14 @@ sluice_status sluice_scene_builder_add_mesh_file(sluice_scene_builder *b, const 
     const struct aiScene *joined = aiApplyPostProcessing(sc, aiProcess_JoinIdenticalVertices);
     if (!joined) {
         /* assimp has released the scene already */
-        sluice_set_error(err, err_size, "%s: assimp cannot join vertices: %s", label,
-                         aiGetErrorString());
+        sr_set_error(err, err_size, "%s: assimp cannot join vertices: %s", label,
+                     aiGetErrorString());
         return SLUICE_ERROR_IO;
     }
     sc = joined;
     if (!sc->mRootNode) {
         aiReleaseImport(sc);
-        sluice_set_error(err, err_size, "%s: the file has no scene graph", label);
+        sr_set_error(err, err_size, "%s: the file has no scene graph", label);
         return SLUICE_ERROR_IO;
     }
 
@@ -369,7 +366,7 @@ sluice_status sluice_scene_builder_add_mesh_file(sluice_scene_builder *b, const 
     f.material_map = malloc((sc->mNumMaterials ? sc->mNumMaterials : 1) * sizeof(uint32_t));
     if (!f.material_map) {
         aiReleaseImport(sc);
-        sluice_set_error(err, err_size, "%s: out of memory", label);
+        sr_set_error(err, err_size, "%s: out of memory", label);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     for (unsigned i = 0; i < sc->mNumMaterials; ++i)
@@ -379,36 +376,36 @@ sluice_status sluice_scene_builder_add_mesh_file(sluice_scene_builder *b, const 
         for (int k = 0; k < 16; ++k)
             root[k] = transform[k];
     }
-    size_t before = sluice_scene_builder_triangle_count(b);
+    size_t before = sr_scene_builder_triangle_count(b);
     st = add_node(&f, sc->mRootNode, root, 0);
-    if (st == SLUICE_OK && sluice_scene_builder_triangle_count(b) == before)
-        sluice_scene_builder_warn(b, "%s: the file has no triangles", label);
+    if (st == SLUICE_OK && sr_scene_builder_triangle_count(b) == before)
+        sr_scene_builder_warn(b, "%s: the file has no triangles", label);
     free(f.material_map);
     aiReleaseImport(sc);
     return st;
 }
 
-sluice_status sluice_scene_load_mesh(const char *path, const sluice_scene_load_options *opts,
-                                     sluice_scene **out, char *err, size_t err_size)
+sluice_status sr_scene_load_mesh(const char *path, const sr_scene_load_options *opts,
+                                 sr_scene **out, char *err, size_t err_size)
 {
     if (!out || !path) {
-        sluice_set_error(err, err_size, "load_mesh: invalid argument");
+        sr_set_error(err, err_size, "load_mesh: invalid argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     *out = NULL;
-    sluice_scene_builder *b = NULL;
-    if (sluice_scene_builder_create(path, &b) != SLUICE_OK) {
-        sluice_set_error(err, err_size, "%s: out of memory", path);
+    sr_scene_builder *b = NULL;
+    if (sr_scene_builder_create(path, &b) != SLUICE_OK) {
+        sr_set_error(err, err_size, "%s: out of memory", path);
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
-    unsigned flags = SLUICE_SCENE_DEFAULT_LIGHT;
+    unsigned flags = SR_SCENE_DEFAULT_LIGHT;
     if (opts) {
-        sluice_scene_builder_set_warning_callback(b, opts->warning, opts->warning_user);
+        sr_scene_builder_set_warning_callback(b, opts->warning, opts->warning_user);
         flags |= opts->flags;
     }
-    sluice_status st = sluice_scene_builder_add_mesh_file(b, path, NULL, NULL, path, err, err_size);
+    sluice_status st = sr_scene_builder_add_mesh_file(b, path, NULL, NULL, path, err, err_size);
     if (st == SLUICE_OK)
-        st = sluice_scene_builder_finish(b, flags, out, err, err_size);
-    sluice_scene_builder_destroy(b);
+        st = sr_scene_builder_finish(b, flags, out, err, err_size);
+    sr_scene_builder_destroy(b);
     return st;
 }

@@ -1,7 +1,7 @@
 /* Tessellated shapes for the builder: geodesic spheres, quads, boxes, rings
  * and the Utah teapot. Purcell's ray tracer takes triangles only (thesis
  * ch. 3.1: "all scene geometry is represented as triangles"), so every
- * shape becomes a mesh here and goes through sluice_scene_builder_add_mesh,
+ * shape becomes a mesh here and goes through sr_scene_builder_add_mesh,
  * with its validation and transform. */
 #include "scene.h"
 
@@ -66,10 +66,10 @@ static void buf_tri(mesh_buf *m, uint32_t a, uint32_t b, uint32_t c)
 }
 
 /* Hands the finished buffer to the builder and frees it. */
-static sluice_status buf_add(sluice_scene_builder *b, mesh_buf *m, const char *source,
+static sluice_status buf_add(sr_scene_builder *b, mesh_buf *m, const char *source,
                              uint32_t material, const float *transform, char *err, size_t err_size)
 {
-    sluice_mesh_desc d;
+    sr_mesh_desc d;
     memset(&d, 0, sizeof d);
     d.source = source;
     d.positions = m->pos;
@@ -79,7 +79,7 @@ static sluice_status buf_add(sluice_scene_builder *b, mesh_buf *m, const char *s
     d.triangle_count = m->nt;
     d.material = material;
     d.transform = transform;
-    sluice_status st = sluice_scene_builder_add_mesh(b, &d, err, err_size);
+    sluice_status st = sr_scene_builder_add_mesh(b, &d, err, err_size);
     buf_free(m);
     return st;
 }
@@ -147,9 +147,9 @@ static void icosahedron(double v[12][3], int f[20][3], int edge[12][12])
     }
 }
 
-sluice_status sluice_scene_builder_add_sphere(sluice_scene_builder *b, const float center[3],
-                                              float radius, unsigned frequency, uint32_t material,
-                                              const float *transform, char *err, size_t err_size)
+sluice_status sr_scene_builder_add_sphere(sr_scene_builder *b, const float center[3], float radius,
+                                          unsigned frequency, uint32_t material,
+                                          const float *transform, char *err, size_t err_size)
 {
     if (!b || !finite3(center) || !(radius > 0.0f) || !isfinite(radius) || frequency < 1 ||
         frequency > 256) {
@@ -252,9 +252,9 @@ sluice_status sluice_scene_builder_add_sphere(sluice_scene_builder *b, const flo
 /* Quad, box, ring                                                     */
 /* ------------------------------------------------------------------ */
 
-sluice_status sluice_scene_builder_add_quad(sluice_scene_builder *b, const float corner[3],
-                                            const float u[3], const float v[3], uint32_t material,
-                                            const float *transform, char *err, size_t err_size)
+sluice_status sr_scene_builder_add_quad(sr_scene_builder *b, const float corner[3],
+                                        const float u[3], const float v[3], uint32_t material,
+                                        const float *transform, char *err, size_t err_size)
 {
     if (!b || !finite3(corner) || !finite3(u) || !finite3(v)) {
         set_err(err, err_size, "needs finite corner, u and v", "quad");
@@ -268,7 +268,7 @@ sluice_status sluice_scene_builder_add_quad(sluice_scene_builder *b, const float
         p[9 + k] = corner[k] + v[k];
     }
     static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
-    sluice_mesh_desc d;
+    sr_mesh_desc d;
     memset(&d, 0, sizeof d);
     d.source = "quad";
     d.positions = p;
@@ -277,12 +277,12 @@ sluice_status sluice_scene_builder_add_quad(sluice_scene_builder *b, const float
     d.triangle_count = 2;
     d.material = material;
     d.transform = transform;
-    return sluice_scene_builder_add_mesh(b, &d, err, err_size);
+    return sr_scene_builder_add_mesh(b, &d, err, err_size);
 }
 
-sluice_status sluice_scene_builder_add_box(sluice_scene_builder *b, const float lo[3],
-                                           const float hi[3], uint32_t material,
-                                           const float *transform, char *err, size_t err_size)
+sluice_status sr_scene_builder_add_box(sr_scene_builder *b, const float lo[3], const float hi[3],
+                                       uint32_t material, const float *transform, char *err,
+                                       size_t err_size)
 {
     if (!b || !finite3(lo) || !finite3(hi) || !(lo[0] < hi[0] && lo[1] < hi[1] && lo[2] < hi[2])) {
         set_err(err, err_size, "needs finite corners with lo < hi on every axis", "box");
@@ -307,7 +307,7 @@ sluice_status sluice_scene_builder_add_box(sluice_scene_builder *b, const float 
                 idx[n++] = q[order[k]];
         }
     }
-    sluice_mesh_desc d;
+    sr_mesh_desc d;
     memset(&d, 0, sizeof d);
     d.source = "box";
     d.positions = p;
@@ -316,13 +316,13 @@ sluice_status sluice_scene_builder_add_box(sluice_scene_builder *b, const float 
     d.triangle_count = 12;
     d.material = material;
     d.transform = transform;
-    return sluice_scene_builder_add_mesh(b, &d, err, err_size);
+    return sr_scene_builder_add_mesh(b, &d, err, err_size);
 }
 
-sluice_status sluice_scene_builder_add_ring(sluice_scene_builder *b, const float center[3],
-                                            float radius, float thickness, float height,
-                                            unsigned segments, uint32_t material,
-                                            const float *transform, char *err, size_t err_size)
+sluice_status sr_scene_builder_add_ring(sr_scene_builder *b, const float center[3], float radius,
+                                        float thickness, float height, unsigned segments,
+                                        uint32_t material, const float *transform, char *err,
+                                        size_t err_size)
 {
     if (!b || !finite3(center) || !isfinite(radius) || !isfinite(thickness) || !isfinite(height) ||
         !(thickness > 0.0f) || !(thickness < radius) || !(height > 0.0f) || segments < 3 ||
@@ -784,9 +784,8 @@ static const double *teapot_pinned(int p, size_t i, size_t j, size_t n)
     return NULL;
 }
 
-sluice_status sluice_scene_builder_add_teapot(sluice_scene_builder *b, unsigned n,
-                                              uint32_t material, const float *transform, char *err,
-                                              size_t err_size)
+sluice_status sr_scene_builder_add_teapot(sr_scene_builder *b, unsigned n, uint32_t material,
+                                          const float *transform, char *err, size_t err_size)
 {
     if (!b || n < 2 || n > 64) {
         set_err(err, err_size, "needs 2 <= n <= 64 quads per patch side", "teapot");

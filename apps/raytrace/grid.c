@@ -14,25 +14,25 @@ sluice_status rt_grid_choose(const float lo[3], const float hi[3], unsigned min_
                              rt_grid_desc *out, char *err, size_t err_size)
 {
     if (!lo || !hi || !out) {
-        sluice_set_error(err, err_size, "rt_grid_choose: NULL argument");
+        sr_set_error(err, err_size, "rt_grid_choose: NULL argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     memset(out, 0, sizeof *out);
     if (min_dim == 0) {
-        sluice_set_error(err, err_size, "grid: the minimum grid dimension must be at least 1");
+        sr_set_error(err, err_size, "grid: the minimum grid dimension must be at least 1");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     static const char axis_name[3] = {'x', 'y', 'z'};
     double ext[3], max_ext = 0.0, mag = 0.0;
     for (int a = 0; a < 3; ++a) {
         if (!isfinite(lo[a]) || !isfinite(hi[a])) {
-            sluice_set_error(err, err_size, "grid: the scene bounds are not finite on %c",
-                             axis_name[a]);
+            sr_set_error(err, err_size, "grid: the scene bounds are not finite on %c",
+                         axis_name[a]);
             return SLUICE_ERROR_INVALID_ARGUMENT;
         }
         if (lo[a] > hi[a]) {
-            sluice_set_error(err, err_size, "grid: the scene bounds are empty on %c (%g > %g)",
-                             axis_name[a], (double)lo[a], (double)hi[a]);
+            sr_set_error(err, err_size, "grid: the scene bounds are empty on %c (%g > %g)",
+                         axis_name[a], (double)lo[a], (double)hi[a]);
             return SLUICE_ERROR_INVALID_ARGUMENT;
         }
         ext[a] = (double)hi[a] - (double)lo[a];
@@ -69,11 +69,11 @@ sluice_status rt_grid_choose(const float lo[3], const float hi[3], unsigned min_
         if (d < 1.0)
             d = 1.0;
         if (d > (double)RT_GRID_MAX_SIDE) {
-            sluice_set_error(err, err_size,
-                             "grid: %.0f voxels along %c exceed the limit of %u (minimum "
-                             "dimension %u on a box of %g x %g x %g); use a smaller minimum "
-                             "dimension",
-                             d, axis_name[a], RT_GRID_MAX_SIDE, min_dim, ext[0], ext[1], ext[2]);
+            sr_set_error(err, err_size,
+                         "grid: %.0f voxels along %c exceed the limit of %u (minimum "
+                         "dimension %u on a box of %g x %g x %g); use a smaller minimum "
+                         "dimension",
+                         d, axis_name[a], RT_GRID_MAX_SIDE, min_dim, ext[0], ext[1], ext[2]);
             memset(out, 0, sizeof *out);
             return SLUICE_ERROR_LIMIT;
         }
@@ -81,10 +81,10 @@ sluice_status rt_grid_choose(const float lo[3], const float hi[3], unsigned min_
         cells *= d;
     }
     if (cells > (double)RT_GRID_MAX_CELLS) {
-        sluice_set_error(err, err_size,
-                         "grid: %u x %u x %u voxels exceed the limit of %u (minimum dimension "
-                         "%u); use a smaller minimum dimension",
-                         out->dims[0], out->dims[1], out->dims[2], RT_GRID_MAX_CELLS, min_dim);
+        sr_set_error(err, err_size,
+                     "grid: %u x %u x %u voxels exceed the limit of %u (minimum dimension "
+                     "%u); use a smaller minimum dimension",
+                     out->dims[0], out->dims[1], out->dims[2], RT_GRID_MAX_CELLS, min_dim);
         memset(out, 0, sizeof *out);
         return SLUICE_ERROR_LIMIT;
     }
@@ -97,8 +97,8 @@ sluice_status rt_grid_choose(const float lo[3], const float hi[3], unsigned min_
         out->cell[a] = (out->hi[a] - out->lo[a]) / (float)out->dims[a];
         if (!isfinite(out->lo[a]) || !isfinite(out->hi[a]) || !(out->cell[a] > 0.0f) ||
             !isfinite(out->cell[a])) {
-            sluice_set_error(err, err_size, "grid: the scene bounds on %c are too large for float",
-                             axis_name[a]);
+            sr_set_error(err, err_size, "grid: the scene bounds on %c are too large for float",
+                         axis_name[a]);
             memset(out, 0, sizeof *out);
             return SLUICE_ERROR_INVALID_ARGUMENT;
         }
@@ -198,7 +198,7 @@ sluice_status rt_grid_desc_check(const rt_grid_desc *desc, size_t *cells, char *
     if (cells)
         *cells = 0;
     if (!desc) {
-        sluice_set_error(err, err_size, "grid: NULL description");
+        sr_set_error(err, err_size, "grid: NULL description");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     size_t n = 1;
@@ -206,21 +206,21 @@ sluice_status rt_grid_desc_check(const rt_grid_desc *desc, size_t *cells, char *
         uint32_t d = desc->dims[a];
         if (d == 0 || !isfinite(desc->lo[a]) || !isfinite(desc->cell[a]) ||
             !(desc->cell[a] > 0.0f) || !isfinite(desc->lo[a] + (float)d * desc->cell[a])) {
-            sluice_set_error(err, err_size,
-                             "grid: bad description on axis %d (dims %u, lo %g, cell %g)", a,
-                             (unsigned)d, (double)desc->lo[a], (double)desc->cell[a]);
+            sr_set_error(err, err_size,
+                         "grid: bad description on axis %d (dims %u, lo %g, cell %g)", a,
+                         (unsigned)d, (double)desc->lo[a], (double)desc->cell[a]);
             return SLUICE_ERROR_INVALID_ARGUMENT;
         }
         if (d > RT_GRID_MAX_SIDE) {
-            sluice_set_error(err, err_size, "grid: %u voxels on axis %d exceed the limit of %u",
-                             (unsigned)d, a, RT_GRID_MAX_SIDE);
+            sr_set_error(err, err_size, "grid: %u voxels on axis %d exceed the limit of %u",
+                         (unsigned)d, a, RT_GRID_MAX_SIDE);
             return SLUICE_ERROR_LIMIT;
         }
         n *= d; /* at most 2^60: no overflow in a 64-bit size_t */
         if (n > RT_GRID_MAX_CELLS) {
-            sluice_set_error(err, err_size, "grid: %u x %u x %u voxels exceed the limit of %u",
-                             (unsigned)desc->dims[0], (unsigned)desc->dims[1],
-                             (unsigned)desc->dims[2], RT_GRID_MAX_CELLS);
+            sr_set_error(err, err_size, "grid: %u x %u x %u voxels exceed the limit of %u",
+                         (unsigned)desc->dims[0], (unsigned)desc->dims[1], (unsigned)desc->dims[2],
+                         RT_GRID_MAX_CELLS);
             return SLUICE_ERROR_LIMIT;
         }
     }

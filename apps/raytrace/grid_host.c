@@ -46,12 +46,12 @@ sluice_status rt_grid_build_host_limit(const rt_grid_desc *desc, const float *po
                                        rt_grid_host *out, char *err, size_t err_size)
 {
     if (!out) {
-        sluice_set_error(err, err_size, "rt_grid_build_host: NULL output");
+        sr_set_error(err, err_size, "rt_grid_build_host: NULL output");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     memset(out, 0, sizeof *out);
     if (!desc || (triangles && (!positions || !indices))) {
-        sluice_set_error(err, err_size, "rt_grid_build_host: NULL argument");
+        sr_set_error(err, err_size, "rt_grid_build_host: NULL argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     size_t cells = 0;
@@ -59,8 +59,8 @@ sluice_status rt_grid_build_host_limit(const rt_grid_desc *desc, const float *po
     if (st != SLUICE_OK)
         return st;
     if (triangles > UINT32_MAX) {
-        sluice_set_error(err, err_size, "grid: %zu triangles exceed the limit of %u", triangles,
-                         (unsigned)UINT32_MAX);
+        sr_set_error(err, err_size, "grid: %zu triangles exceed the limit of %u", triangles,
+                     (unsigned)UINT32_MAX);
         return SLUICE_ERROR_LIMIT;
     }
 
@@ -79,7 +79,7 @@ sluice_status rt_grid_build_host_limit(const rt_grid_desc *desc, const float *po
     uint32_t *tris = NULL;
     pair_list pairs = {0};
     if (!start || !tri_end) {
-        sluice_set_error(err, err_size, "grid: out of host memory for %zu voxels", cells);
+        sr_set_error(err, err_size, "grid: out of host memory for %zu voxels", cells);
         st = SLUICE_ERROR_OUT_OF_MEMORY;
         goto fail;
     }
@@ -91,8 +91,7 @@ sluice_status rt_grid_build_host_limit(const rt_grid_desc *desc, const float *po
         rt_tri_setup(&tri, positions + 3 * (size_t)ix[0], positions + 3 * (size_t)ix[1],
                      positions + 3 * (size_t)ix[2]);
         if (!tri.valid) {
-            sluice_set_error(err, err_size, "grid: triangle %zu has a corner that is not finite",
-                             t);
+            sr_set_error(err, err_size, "grid: triangle %zu has a corner that is not finite", t);
             st = SLUICE_ERROR_INVALID_ARGUMENT;
             goto fail;
         }
@@ -110,18 +109,17 @@ sluice_status rt_grid_build_host_limit(const rt_grid_desc *desc, const float *po
                             continue;
                         uint32_t cell = (uint32_t)(x + nx * y + nxy * z);
                         if (pairs.count >= max_pairs) {
-                            sluice_set_error(err, err_size,
-                                             "grid: more than the limit of %zu (voxel, "
-                                             "triangle) entries (at triangle %zu of %zu); use "
-                                             "a coarser grid",
-                                             max_pairs, t, triangles);
+                            sr_set_error(err, err_size,
+                                         "grid: more than the limit of %zu (voxel, "
+                                         "triangle) entries (at triangle %zu of %zu); use "
+                                         "a coarser grid",
+                                         max_pairs, t, triangles);
                             st = SLUICE_ERROR_LIMIT;
                             goto fail;
                         }
                         if (!pair_push(&pairs, cell)) {
-                            sluice_set_error(err, err_size,
-                                             "grid: out of host memory for %zu entries",
-                                             pairs.count);
+                            sr_set_error(err, err_size, "grid: out of host memory for %zu entries",
+                                         pairs.count);
                             st = SLUICE_ERROR_OUT_OF_MEMORY;
                             goto fail;
                         }
@@ -142,7 +140,7 @@ sluice_status rt_grid_build_host_limit(const rt_grid_desc *desc, const float *po
     }
     tris = malloc((pairs.count ? pairs.count : 1) * sizeof *tris);
     if (!tris) {
-        sluice_set_error(err, err_size, "grid: out of host memory for %zu entries", pairs.count);
+        sr_set_error(err, err_size, "grid: out of host memory for %zu entries", pairs.count);
         st = SLUICE_ERROR_OUT_OF_MEMORY;
         goto fail;
     }

@@ -232,12 +232,12 @@ static int parse(int argc, char **argv, cli *c)
     return 0;
 }
 
-static int write_image(rt_renderer *r, sluice_image *img, const char *path, size_t *bad_pixels)
+static int write_image(rt_renderer *r, sr_image *img, const char *path, size_t *bad_pixels)
 {
     char err[512] = "";
     sluice_status st = rt_renderer_image(r, img, bad_pixels);
     if (st == SLUICE_OK)
-        st = sluice_image_write(img, path, err, sizeof err);
+        st = sr_image_write(img, path, err, sizeof err);
     if (st != SLUICE_OK) {
         fprintf(stderr, PROG ": writing %s: %s\n", path, err[0] ? err : sluice_status_string(st));
         return 1;
@@ -253,26 +253,26 @@ int main(int argc, char **argv)
         return rc < 0 ? 0 : rc;
 
     char err[1024] = "";
-    sluice_scene_load_options lo;
+    sr_scene_load_options lo;
     memset(&lo, 0, sizeof lo);
-    lo.flags = SLUICE_SCENE_DEFAULT_LIGHT;
-    sluice_scene *scene = NULL;
-    sluice_status st = sluice_scene_load(c.scene, &lo, &scene, err, sizeof err);
+    lo.flags = SR_SCENE_DEFAULT_LIGHT;
+    sr_scene *scene = NULL;
+    sluice_status st = sr_scene_load(c.scene, &lo, &scene, err, sizeof err);
     if (st != SLUICE_OK) {
         fprintf(stderr, PROG ": --scene %s: %s\n", c.scene, err);
         return 1;
     }
-    const sluice_render_settings *rs = sluice_scene_render_settings(scene);
-    const sluice_camera *cam = sluice_scene_camera(scene);
+    const sr_render_settings *rs = sr_scene_render_settings(scene);
+    const sr_camera *cam = sr_scene_camera(scene);
     if (c.mode < 0) {
         switch (rs->mode) {
-        case SLUICE_RENDER_CAST:
+        case SR_RENDER_CAST:
             c.mode = RT_MODE_CAST;
             break;
-        case SLUICE_RENDER_WHITTED:
+        case SR_RENDER_WHITTED:
             c.mode = RT_MODE_WHITTED;
             break;
-        case SLUICE_RENDER_PATH:
+        case SR_RENDER_PATH:
             c.mode = RT_MODE_PATH;
             break;
         default:
@@ -291,7 +291,7 @@ int main(int argc, char **argv)
     unsigned spp = c.have_spp ? c.spp : (rs->samples_per_pixel ? rs->samples_per_pixel : 1);
     if ((unsigned long long)ro.width * ro.height > (1u << 26)) {
         fprintf(stderr, PROG ": --size %ux%u: too many pixels\n", ro.width, ro.height);
-        sluice_scene_destroy(scene);
+        sr_scene_destroy(scene);
         return 2;
     }
     c.topt.render_mode = ro.mode;
@@ -303,7 +303,7 @@ int main(int argc, char **argv)
     sluice_context *ctx = NULL;
     rt_tracer *tracer = NULL;
     rt_renderer *rend = NULL;
-    sluice_image *img = NULL;
+    sr_image *img = NULL;
     int exit_code = 1;
     st = sluice_context_create(&co, &ctx, err, sizeof err);
     if (st != SLUICE_OK) {
@@ -314,7 +314,7 @@ int main(int argc, char **argv)
     if (st == SLUICE_OK)
         st = rt_renderer_create(tracer, &ro, &rend, err, sizeof err);
     if (st == SLUICE_OK)
-        st = sluice_image_create(ro.width, ro.height, 3, &img, err, sizeof err);
+        st = sr_image_create(ro.width, ro.height, 3, &img, err, sizeof err);
     if (st != SLUICE_OK) {
         fprintf(stderr, PROG ": %s\n", err);
         goto done;
@@ -384,10 +384,10 @@ int main(int argc, char **argv)
                 c.out);
     exit_code = interrupted ? 130 : 0;
 done:
-    sluice_image_destroy(img);
+    sr_image_destroy(img);
     rt_renderer_destroy(rend);
     rt_tracer_destroy(tracer);
     sluice_context_destroy(ctx);
-    sluice_scene_destroy(scene);
+    sr_scene_destroy(scene);
     return exit_code;
 }

@@ -49,7 +49,7 @@ static void cross3(const float a[3], const float b[3], float o[3])
     o[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-void rt_camera_frame(const sluice_camera *cam, unsigned width, unsigned height, rt_frame *f)
+void rt_camera_frame(const sr_camera *cam, unsigned width, unsigned height, rt_frame *f)
 {
     float fwd[3], right[3], up[3];
     sub3(cam->look_at, cam->eye, fwd);
@@ -100,31 +100,31 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     if (out)
         *out = NULL;
     if (!t || !opt || !out || opt->mode > RT_MODE_PATH || opt->width == 0 || opt->height == 0 ||
-        opt->width > SLUICE_SCENE_MAX_IMAGE_SIDE || opt->height > SLUICE_SCENE_MAX_IMAGE_SIDE ||
+        opt->width > SR_SCENE_MAX_IMAGE_SIDE || opt->height > SR_SCENE_MAX_IMAGE_SIDE ||
         (uint64_t)opt->width * opt->height > (1u << 26) || opt->light_samples == 0 ||
         opt->light_samples > 1024 || opt->max_depth > 64) {
-        sluice_set_error(err, err_size, "renderer: bad options");
+        sr_set_error(err, err_size, "renderer: bad options");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     rt_renderer *r = calloc(1, sizeof *r);
     if (!r) {
-        sluice_set_error(err, err_size, "out of host memory");
+        sr_set_error(err, err_size, "out of host memory");
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     r->t = t;
     r->opt = *opt;
-    const sluice_scene *sc = t->scene;
-    const sluice_scene_stats *ss = sluice_scene_statistics(sc);
+    const sr_scene *sc = t->scene;
+    const sr_scene_stats *ss = sr_scene_statistics(sc);
     rt_frame *f = &r->frame;
     memset(f, 0, sizeof *f);
-    rt_camera_frame(sluice_scene_camera(sc), opt->width, opt->height, f);
+    rt_camera_frame(sr_scene_camera(sc), opt->width, opt->height, f);
     f->seed = opt->seed;
     f->mode = opt->mode;
     f->max_depth = opt->max_depth;
     f->light_samples = opt->light_samples;
     f->point_lights = (rt_u32)ss->point_lights;
-    sluice_area_lights al;
-    sluice_scene_area_lights(sc, &al);
+    sr_area_lights al;
+    sr_scene_area_lights(sc, &al);
     f->area_lights = (rt_u32)al.count;
     f->area_total = (float)al.total_area;
     float diag = 0, maxabs = 0;
@@ -138,9 +138,9 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     f->scene_eps = 1e-4f * sqrtf(diag) + 4e-6f * maxabs;
 
     unsigned mode = opt->mode;
-    int specular_kinds = (ss->kinds_present & (SLUICE_KIND_BIT(SLUICE_MATERIAL_MIRROR) |
-                                               SLUICE_KIND_BIT(SLUICE_MATERIAL_GLASS))) != 0;
-    int glass = (ss->kinds_present & SLUICE_KIND_BIT(SLUICE_MATERIAL_GLASS)) != 0;
+    int specular_kinds = (ss->kinds_present &
+                          (SR_KIND_BIT(SR_MATERIAL_MIRROR) | SR_KIND_BIT(SR_MATERIAL_GLASS))) != 0;
+    int glass = (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_GLASS)) != 0;
     r->per_shadow =
         mode == RT_MODE_CAST ? 0 : ss->point_lights + (al.count ? opt->light_samples : 0);
     r->per_secondary =
@@ -186,7 +186,7 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     if (st == SLUICE_OK)
         st = sluice_kernel_set_counters(r->k_resolve, r->counters);
     if (st != SLUICE_OK) {
-        sluice_set_error(err, err_size, "renderer: %s", sluice_context_error(ctx));
+        sr_set_error(err, err_size, "renderer: %s", sluice_context_error(ctx));
         rt_renderer_destroy(r);
         return st;
     }
@@ -306,12 +306,12 @@ sluice_status rt_renderer_sample(rt_renderer *r)
     return st;
 }
 
-sluice_status rt_renderer_image(rt_renderer *r, sluice_image *img, size_t *bad_pixels)
+sluice_status rt_renderer_image(rt_renderer *r, sr_image *img, size_t *bad_pixels)
 {
     if (bad_pixels)
         *bad_pixels = 0;
-    if (!r || !img || sluice_image_width(img) != r->opt.width ||
-        sluice_image_height(img) != r->opt.height || sluice_image_channels(img) != 3)
+    if (!r || !img || sr_image_width(img) != r->opt.width ||
+        sr_image_height(img) != r->opt.height || sr_image_channels(img) != 3)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     size_t pixels = (size_t)r->opt.width * r->opt.height;
     int64_t *acc = malloc(pixels * 3 * sizeof *acc);
@@ -319,7 +319,7 @@ sluice_status rt_renderer_image(rt_renderer *r, sluice_image *img, size_t *bad_p
         return SLUICE_ERROR_OUT_OF_MEMORY;
     sluice_status st = sluice_stream_download(r->accum, acc, pixels, NULL);
     if (st == SLUICE_OK) {
-        float *px = sluice_image_pixels(img);
+        float *px = sr_image_pixels(img);
         double scale = 1.0 / ((double)RT_FIXED_SCALE * (r->stats.samples ? r->stats.samples : 1));
         size_t bad = 0;
         for (size_t i = 0; i < pixels; ++i) {

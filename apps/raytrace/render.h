@@ -53,13 +53,13 @@ sluice_status rt_renderer_sample(rt_renderer *r);
 /** Writes the mean of the samples so far into `img` (RGB, the renderer's
  *  size). Counts pixels that would not be finite (none should be) in
  *  `*bad_pixels` (may be NULL) and writes 0 there instead. */
-sluice_status rt_renderer_image(rt_renderer *r, sluice_image *img, size_t *bad_pixels);
+sluice_status rt_renderer_image(rt_renderer *r, sr_image *img, size_t *bad_pixels);
 
 /** Statistics so far. */
 const rt_render_stats *rt_renderer_stats(const rt_renderer *r);
 
 /** Fills the camera frame for `cam` seen at width x height (exposed for
  *  tests of the camera). */
-void rt_camera_frame(const sluice_camera *cam, unsigned width, unsigned height, rt_frame *f);
+void rt_camera_frame(const sr_camera *cam, unsigned width, unsigned height, rt_frame *f);
 
 #endif

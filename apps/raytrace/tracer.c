@@ -47,15 +47,15 @@ static sluice_status upload(rt_tracer *t, size_t record, size_t count, const voi
 
 static sluice_status upload_scene(rt_tracer *t)
 {
-    const sluice_scene *s = t->scene;
-    size_t nv = sluice_scene_vertex_count(s), nt = sluice_scene_triangle_count(s);
-    const float *pos = sluice_scene_positions(s);
-    const uint32_t *idx = sluice_scene_indices(s);
+    const sr_scene *s = t->scene;
+    size_t nv = sr_scene_vertex_count(s), nt = sr_scene_triangle_count(s);
+    const float *pos = sr_scene_positions(s);
+    const uint32_t *idx = sr_scene_indices(s);
     sluice_status st = upload(t, 12, nv, pos, &t->positions);
     if (st == SLUICE_OK)
         st = upload(t, 12, nt, idx, &t->indices);
     if (st == SLUICE_OK)
-        st = upload(t, 4, nt, sluice_scene_triangle_materials(s), &t->tri_mat);
+        st = upload(t, 4, nt, sr_scene_triangle_materials(s), &t->tri_mat);
     if (st != SLUICE_OK)
         return st;
 
@@ -82,14 +82,14 @@ static sluice_status upload_scene(rt_tracer *t)
     if (st != SLUICE_OK)
         return st;
 
-    const float *normals = sluice_scene_normals(s);
+    const float *normals = sr_scene_normals(s);
     static const float zero[3] = {0, 0, 0};
     st = normals ? upload(t, 12, nv, normals, &t->normals) : upload(t, 12, 1, zero, &t->normals);
     if (st != SLUICE_OK)
         return st;
 
-    size_t nm = sluice_scene_material_count(s);
-    const sluice_material *mats = sluice_scene_materials(s);
+    size_t nm = sr_scene_material_count(s);
+    const sr_material *mats = sr_scene_materials(s);
     rt_material *rm = calloc(nm ? nm : 1, sizeof *rm);
     if (!rm)
         return SLUICE_ERROR_OUT_OF_MEMORY;
@@ -112,8 +112,8 @@ static sluice_status upload_scene(rt_tracer *t)
     if (st != SLUICE_OK)
         return st;
 
-    size_t np = sluice_scene_point_light_count(s);
-    const sluice_point_light *pl = sluice_scene_point_lights(s);
+    size_t np = sr_scene_point_light_count(s);
+    const sr_point_light *pl = sr_scene_point_lights(s);
     rt_point_light *rp = calloc(np ? np : 1, sizeof *rp);
     if (!rp)
         return SLUICE_ERROR_OUT_OF_MEMORY;
@@ -130,8 +130,8 @@ static sluice_status upload_scene(rt_tracer *t)
     if (st != SLUICE_OK)
         return st;
 
-    sluice_area_lights al;
-    sluice_scene_area_lights(s, &al);
+    sr_area_lights al;
+    sr_scene_area_lights(s, &al);
     st = upload(t, 4, al.count, al.triangles, &t->area_tris);
     if (st == SLUICE_OK)
         st = upload(t, 4, al.count, al.area_cdf, &t->area_cdf);
@@ -140,15 +140,14 @@ static sluice_status upload_scene(rt_tracer *t)
 
 static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
 {
-    const sluice_scene_stats *ss = sluice_scene_statistics(t->scene);
+    const sr_scene_stats *ss = sr_scene_statistics(t->scene);
     rt_grid_desc desc;
-    size_t nt = sluice_scene_triangle_count(t->scene);
+    size_t nt = sr_scene_triangle_count(t->scene);
     unsigned min_dim = t->opt.grid_min_dim;
     if (min_dim == RT_GRID_AUTO_MIN_DIM)
-        min_dim =
-            rt_grid_auto_min_dim_edge(ss->bounds_min, ss->bounds_max, nt,
-                                      rt_grid_edge_quartile(sluice_scene_positions(t->scene),
-                                                            sluice_scene_indices(t->scene), nt));
+        min_dim = rt_grid_auto_min_dim_edge(
+            ss->bounds_min, ss->bounds_max, nt,
+            rt_grid_edge_quartile(sr_scene_positions(t->scene), sr_scene_indices(t->scene), nt));
     sluice_status st =
         rt_grid_choose(ss->bounds_min, ss->bounds_max, min_dim, &desc, err, err_size);
     if (st != SLUICE_OK)
@@ -156,16 +155,16 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
     if (t->opt.grid_build == RT_GRID_BUILD_DEVICE) {
         st = rt_grid_build_device(t->ctx, &desc, t->positions, t->indices, nt, &t->grid);
         if (st != SLUICE_OK)
-            sluice_set_error(err, err_size, "grid: %s", sluice_context_error(t->ctx));
+            sr_set_error(err, err_size, "grid: %s", sluice_context_error(t->ctx));
     } else {
         rt_grid_host h;
         memset(&h, 0, sizeof h);
-        st = rt_grid_build_host(&desc, sluice_scene_positions(t->scene),
-                                sluice_scene_indices(t->scene), nt, &h, err, err_size);
+        st = rt_grid_build_host(&desc, sr_scene_positions(t->scene), sr_scene_indices(t->scene), nt,
+                                &h, err, err_size);
         if (st == SLUICE_OK) {
             st = rt_grid_upload(t->ctx, &h, &t->grid);
             if (st != SLUICE_OK)
-                sluice_set_error(err, err_size, "grid upload: %s", sluice_context_error(t->ctx));
+                sr_set_error(err, err_size, "grid upload: %s", sluice_context_error(t->ctx));
         }
         rt_grid_host_free(&h);
     }
@@ -212,12 +211,12 @@ static sluice_status choose_fused_path(rt_tracer *t, char *err, size_t err_size)
     size_t cells = (size_t)d->dims[0] * d->dims[1] * d->dims[2], occupied = 0;
     uint32_t *start = malloc((cells + 1) * sizeof *start);
     if (!start) {
-        sluice_set_error(err, err_size, "out of host memory");
+        sr_set_error(err, err_size, "out of host memory");
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     sluice_status st = sluice_stream_download(t->grid.cell_start, start, cells + 1, NULL);
     if (st != SLUICE_OK) {
-        sluice_set_error(err, err_size, "grid download: %s", sluice_context_error(t->ctx));
+        sr_set_error(err, err_size, "grid download: %s", sluice_context_error(t->ctx));
         free(start);
         return st;
     }
@@ -279,11 +278,11 @@ static sluice_status build_list_copy(rt_tracer *t)
 
 static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
 {
-    const sluice_scene_stats *ss = sluice_scene_statistics(t->scene);
+    const sr_scene_stats *ss = sr_scene_statistics(t->scene);
     unsigned mode = t->opt.render_mode;
     int traces_specular = mode == RT_MODE_WHITTED || mode == RT_MODE_PATH;
-    int mirror = traces_specular && (ss->kinds_present & SLUICE_KIND_BIT(SLUICE_MATERIAL_MIRROR));
-    int glass = traces_specular && (ss->kinds_present & SLUICE_KIND_BIT(SLUICE_MATERIAL_GLASS));
+    int mirror = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_MIRROR));
+    int glass = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_GLASS));
     char opts[384], walk[96] = "";
     if (!t->walks_ahead && t->list_stride)
         snprintf(walk, sizeof walk, " -DRT_LIST_COPY -DRT_LIST_STRIDE=%zuu", t->list_stride);
@@ -315,8 +314,7 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
          "reflection kernels and passes (no mirror or glass)");
     SKIP(traces_specular && (mirror || glass) && !glass, "refraction code (no glass)");
     SKIP(!traces_specular, "reflection/refraction (mode does not trace them)");
-    SKIP(mode != RT_MODE_CAST && sluice_scene_light_count(t->scene) == 0,
-         "shadow pass (no lights)");
+    SKIP(mode != RT_MODE_CAST && sr_scene_light_count(t->scene) == 0, "shadow pass (no lights)");
     SKIP(mode != RT_MODE_CAST && ss->point_lights == 0, "point-light shadow rays (none)");
     SKIP(mode != RT_MODE_CAST && ss->emissive_triangles == 0, "area-light sampling (none)");
     SKIP(mode == RT_MODE_CAST, "shadow pass (cast mode)");
@@ -331,7 +329,7 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     if (st == SLUICE_OK)
         st = sluice_program_build(t->program);
     if (st != SLUICE_OK) {
-        sluice_set_error(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
+        sr_set_error(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
         return st;
     }
     st = sluice_kernel_create(t->program, "rt_setup", &t->k_setup);
@@ -348,32 +346,32 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     if (st == SLUICE_OK)
         st = sluice_kernel_create(t->program, "rt_trace_fused", &t->k_fused);
     if (st != SLUICE_OK)
-        sluice_set_error(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
+        sr_set_error(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
     return st;
 }
 
-sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
+sluice_status rt_tracer_create(sluice_context *ctx, const sr_scene *scene,
                                const rt_tracer_options *opt, rt_tracer **out, char *err,
                                size_t err_size)
 {
     if (out)
         *out = NULL;
     if (!ctx || !scene || !out) {
-        sluice_set_error(err, err_size, "rt_tracer_create: NULL argument");
+        sr_set_error(err, err_size, "rt_tracer_create: NULL argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     rt_tracer_options o = opt ? *opt : rt_tracer_options_default();
     if (o.unroll_steps == 0 || o.unroll_tests == 0 || o.unroll_steps > 4096 ||
         o.unroll_tests > 4096 || !(o.intersect_threshold >= 0.0f) || o.intersect_threshold > 1.0f ||
         (unsigned)o.fused_walk > (unsigned)RT_WALK_ON) {
-        sluice_set_error(
-            err, err_size, "rt_tracer_create: bad options (min dim %u, unroll %u/%u, threshold %g)",
-            o.grid_min_dim, o.unroll_steps, o.unroll_tests, (double)o.intersect_threshold);
+        sr_set_error(err, err_size,
+                     "rt_tracer_create: bad options (min dim %u, unroll %u/%u, threshold %g)",
+                     o.grid_min_dim, o.unroll_steps, o.unroll_tests, (double)o.intersect_threshold);
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
     rt_tracer *t = calloc(1, sizeof *t);
     if (!t) {
-        sluice_set_error(err, err_size, "out of host memory");
+        sr_set_error(err, err_size, "out of host memory");
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     t->ctx = ctx;
@@ -381,7 +379,7 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
     t->opt = o;
     sluice_status st = upload_scene(t);
     if (st != SLUICE_OK)
-        sluice_set_error(err, err_size, "scene upload: %s", sluice_context_error(ctx));
+        sr_set_error(err, err_size, "scene upload: %s", sluice_context_error(ctx));
     if (st == SLUICE_OK)
         st = build_grid(t, err, err_size);
     if (st == SLUICE_OK)
@@ -389,7 +387,7 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
     if (st == SLUICE_OK)
         st = build_program(t, err, err_size);
     if (st == SLUICE_OK && (st = build_list_copy(t)) != SLUICE_OK)
-        sluice_set_error(err, err_size, "list copy: %s", sluice_context_error(ctx));
+        sr_set_error(err, err_size, "list copy: %s", sluice_context_error(ctx));
     static const char *const ctr_names[] = {"voxels", "tests", "done"};
     if (st == SLUICE_OK)
         st = sluice_counters_create(ctx, RT_CTR_TRACE_COUNT, ctr_names, &t->counters);
@@ -403,7 +401,7 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
         st = sluice_kernel_set_counters(t->k_fused, t->counters);
     if (st != SLUICE_OK) {
         if (err && err_size && !err[0])
-            sluice_set_error(err, err_size, "ray tracer: %s", sluice_context_error(ctx));
+            sr_set_error(err, err_size, "ray tracer: %s", sluice_context_error(ctx));
         rt_tracer_destroy(t);
         return st;
     }

@@ -115,7 +115,7 @@ typedef struct rt_tracer rt_tracer;
  * Uploads `scene`, builds its grid and the kernels. The context and the scene
  * must outlive the tracer. On failure `*out` is NULL and `err` says why.
  */
-sluice_status rt_tracer_create(sluice_context *ctx, const sluice_scene *scene,
+sluice_status rt_tracer_create(sluice_context *ctx, const sr_scene *scene,
                                const rt_tracer_options *opt, rt_tracer **out, char *err,
                                size_t err_size);
 

@@ -12,7 +12,7 @@ enum { RT_CTR_VOXELS = 0, RT_CTR_TESTS = 1, RT_CTR_DONE = 2, RT_CTR_TRACE_COUNT 
 
 struct rt_tracer {
     sluice_context *ctx;
-    const sluice_scene *scene;
+    const sr_scene *scene;
     rt_tracer_options opt;
     rt_grid_device grid;
     rt_grid_args grid_args;

@@ -38,7 +38,7 @@ static void usage(FILE *f)
                "  sluice-imgdiff out.exr ref.exr --metric psnr --fail 40 --json\n");
 }
 
-static double metric_value(const sluice_image_metrics *m, enum metric which)
+static double metric_value(const sr_image_metrics *m, enum metric which)
 {
     switch (which) {
     case METRIC_RELMSE:
@@ -149,16 +149,16 @@ int main(int argc, char **argv)
     }
 
     char err[1024];
-    sluice_image *img[2] = {NULL, NULL};
+    sr_image *img[2] = {NULL, NULL};
     int rc = 2;
     for (int k = 0; k < 2; ++k) {
-        if (sluice_image_read(paths[k], &img[k], err, sizeof err) != SLUICE_OK) {
+        if (sr_image_read(paths[k], &img[k], err, sizeof err) != SLUICE_OK) {
             fprintf(stderr, "sluice-imgdiff: %s\n", err);
             goto done;
         }
     }
-    sluice_image_metrics m;
-    if (sluice_image_compare(img[0], img[1], &m, err, sizeof err) != SLUICE_OK) {
+    sr_image_metrics m;
+    if (sr_image_compare(img[0], img[1], &m, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, "sluice-imgdiff: '%s' and '%s': %s\n", paths[0], paths[1], err);
         goto done;
     }
@@ -166,7 +166,7 @@ int main(int argc, char **argv)
     double value = metric_value(&m, which);
     int over = which == METRIC_PSNR ? value < threshold : value > threshold;
     int failed = have_fail && (over || m.nan_count || m.inf_count);
-    unsigned w = sluice_image_width(img[0]), h = sluice_image_height(img[0]);
+    unsigned w = sr_image_width(img[0]), h = sr_image_height(img[0]);
     if (json) {
         printf("{\"image\": ");
         json_string(paths[0]);
@@ -214,7 +214,7 @@ int main(int argc, char **argv)
     rc = failed ? 1 : 0;
 
 done:
-    sluice_image_destroy(img[0]);
-    sluice_image_destroy(img[1]);
+    sr_image_destroy(img[0]);
+    sr_image_destroy(img[1]);
     return rc;
 }

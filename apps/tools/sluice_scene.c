@@ -33,31 +33,31 @@ static void usage(FILE *f)
 
 static void list(void)
 {
-    for (const char *const *n = sluice_scene_builtin_names(); *n; ++n)
-        printf("%-14s %s\n", *n, sluice_scene_builtin_description(*n));
+    for (const char *const *n = sr_scene_builtin_names(); *n; ++n)
+        printf("%-14s %s\n", *n, sr_scene_builtin_description(*n));
 }
 
 /* Triangles per material, counted from the per-triangle material array. */
-static size_t *material_counts(const sluice_scene *s)
+static size_t *material_counts(const sr_scene *s)
 {
-    size_t nm = sluice_scene_material_count(s), nt = sluice_scene_triangle_count(s);
+    size_t nm = sr_scene_material_count(s), nt = sr_scene_triangle_count(s);
     size_t *c = calloc(nm ? nm : 1, sizeof *c);
     if (!c)
         return NULL;
-    const uint32_t *tm = sluice_scene_triangle_materials(s);
+    const uint32_t *tm = sr_scene_triangle_materials(s);
     for (size_t t = 0; t < nt; ++t)
         c[tm[t]]++;
     return c;
 }
 
-static void print_text(const sluice_scene *s)
+static void print_text(const sr_scene *s)
 {
-    const sluice_scene_stats *st = sluice_scene_statistics(s);
-    const sluice_camera *c = sluice_scene_camera(s);
-    const sluice_render_settings *r = sluice_scene_render_settings(s);
-    const sluice_material *m = sluice_scene_materials(s);
+    const sr_scene_stats *st = sr_scene_statistics(s);
+    const sr_camera *c = sr_scene_camera(s);
+    const sr_render_settings *r = sr_scene_render_settings(s);
+    const sr_material *m = sr_scene_materials(s);
     size_t *counts = material_counts(s);
-    printf("scene       %s\n", sluice_scene_source(s));
+    printf("scene       %s\n", sr_scene_source(s));
     printf("triangles   %zu\n", st->triangles);
     printf("vertices    %zu%s\n", st->vertices, st->has_normals ? " (with normals)" : "");
     printf("bounds      min (%g, %g, %g)  max (%g, %g, %g)\n", st->bounds_min[0], st->bounds_min[1],
@@ -65,36 +65,34 @@ static void print_text(const sluice_scene *s)
     printf("materials   %zu\n", st->materials);
     for (size_t i = 0; i < st->materials; ++i) {
         printf("  %-3zu %-16s %-8s albedo (%g, %g, %g)", i, m[i].name,
-               sluice_material_kind_name(m[i].kind), m[i].albedo[0], m[i].albedo[1],
-               m[i].albedo[2]);
-        if (m[i].kind != SLUICE_MATERIAL_DIFFUSE && m[i].kind != SLUICE_MATERIAL_EMISSIVE)
+               sr_material_kind_name(m[i].kind), m[i].albedo[0], m[i].albedo[1], m[i].albedo[2]);
+        if (m[i].kind != SR_MATERIAL_DIFFUSE && m[i].kind != SR_MATERIAL_EMISSIVE)
             printf(" specular (%g, %g, %g)", m[i].specular[0], m[i].specular[1], m[i].specular[2]);
-        if (m[i].kind == SLUICE_MATERIAL_GLOSSY)
+        if (m[i].kind == SR_MATERIAL_GLOSSY)
             printf(" exponent %g", m[i].exponent);
-        if (m[i].kind == SLUICE_MATERIAL_GLASS)
+        if (m[i].kind == SR_MATERIAL_GLASS)
             printf(" ior %g", m[i].ior);
-        if (sluice_material_is_emissive(&m[i]))
+        if (sr_material_is_emissive(&m[i]))
             printf(" emission (%g, %g, %g)", m[i].emission[0], m[i].emission[1], m[i].emission[2]);
         if (counts)
             printf(", %zu triangles", counts[i]);
         printf("\n");
     }
     printf("by kind    ");
-    for (int k = 0; k < SLUICE_MATERIAL_KIND_COUNT; ++k) {
-        if (st->kinds_present & SLUICE_KIND_BIT(k))
-            printf(" %s %zu", sluice_material_kind_name((sluice_material_kind)k),
-                   st->triangles_by_kind[k]);
+    for (int k = 0; k < SR_MATERIAL_KIND_COUNT; ++k) {
+        if (st->kinds_present & SR_KIND_BIT(k))
+            printf(" %s %zu", sr_material_kind_name((sr_material_kind)k), st->triangles_by_kind[k]);
     }
     printf(" (triangles)\n");
-    sluice_area_lights al;
-    sluice_scene_area_lights(s, &al);
+    sr_area_lights al;
+    sr_scene_area_lights(s, &al);
     printf("lights      %zu point, %zu emissive triangles", st->point_lights,
            st->emissive_triangles);
     if (al.count)
         printf(" (area %g, power (%g, %g, %g))", al.total_area, al.total_power[0],
                al.total_power[1], al.total_power[2]);
     printf("\n");
-    const sluice_point_light *pl = sluice_scene_point_lights(s);
+    const sr_point_light *pl = sr_scene_point_lights(s);
     for (size_t i = 0; i < st->point_lights; ++i)
         printf("  point     at (%g, %g, %g) intensity (%g, %g, %g)\n", pl[i].position[0],
                pl[i].position[1], pl[i].position[2], pl[i].intensity[0], pl[i].intensity[1],
@@ -105,10 +103,10 @@ static void print_text(const sluice_scene *s)
            c->up[1], c->up[2], c->vfov, c->width, c->height);
     printf("render      spp %u, max depth %u, light samples %u, photons %u, lookup %u, mode %s\n",
            r->samples_per_pixel, r->max_depth, r->light_samples, r->photons, r->photon_lookup,
-           sluice_render_mode_name(r->mode));
+           sr_render_mode_name(r->mode));
     printf("degenerate  %zu dropped\n", st->degenerate_dropped);
     printf("warnings    %zu\n", st->warnings);
-    const char *w = sluice_scene_warnings(s);
+    const char *w = sr_scene_warnings(s);
     while (*w) {
         const char *nl = strchr(w, '\n');
         size_t n = nl ? (size_t)(nl - w) : strlen(w);
@@ -124,12 +122,12 @@ static cJSON *vec3(const float *v)
 }
 
 /* Builds the JSON document; NULL when out of memory. */
-static cJSON *stats_json(const sluice_scene *s)
+static cJSON *stats_json(const sr_scene *s)
 {
-    const sluice_scene_stats *st = sluice_scene_statistics(s);
-    const sluice_camera *c = sluice_scene_camera(s);
-    const sluice_render_settings *r = sluice_scene_render_settings(s);
-    const sluice_material *m = sluice_scene_materials(s);
+    const sr_scene_stats *st = sr_scene_statistics(s);
+    const sr_camera *c = sr_scene_camera(s);
+    const sr_render_settings *r = sr_scene_render_settings(s);
+    const sr_material *m = sr_scene_materials(s);
     size_t *counts = material_counts(s);
     cJSON *o = cJSON_CreateObject();
     if (!o || !counts) {
@@ -137,7 +135,7 @@ static cJSON *stats_json(const sluice_scene *s)
         free(counts);
         return NULL;
     }
-    cJSON_AddStringToObject(o, "scene", sluice_scene_source(s));
+    cJSON_AddStringToObject(o, "scene", sr_scene_source(s));
     cJSON_AddNumberToObject(o, "triangles", (double)st->triangles);
     cJSON_AddNumberToObject(o, "vertices", (double)st->vertices);
     cJSON_AddBoolToObject(o, "normals", st->has_normals);
@@ -152,7 +150,7 @@ static cJSON *stats_json(const sluice_scene *s)
         if (!e)
             break;
         cJSON_AddStringToObject(e, "name", m[i].name);
-        cJSON_AddStringToObject(e, "kind", sluice_material_kind_name(m[i].kind));
+        cJSON_AddStringToObject(e, "kind", sr_material_kind_name(m[i].kind));
         cJSON_AddItemToObject(e, "albedo", vec3(m[i].albedo));
         cJSON_AddItemToObject(e, "specular", vec3(m[i].specular));
         cJSON_AddNumberToObject(e, "exponent", m[i].exponent);
@@ -162,14 +160,14 @@ static cJSON *stats_json(const sluice_scene *s)
         cJSON_AddItemToArray(mats, e);
     }
     cJSON *kinds = cJSON_AddObjectToObject(o, "triangles_by_kind");
-    for (int k = 0; kinds && k < SLUICE_MATERIAL_KIND_COUNT; ++k)
-        cJSON_AddNumberToObject(kinds, sluice_material_kind_name((sluice_material_kind)k),
+    for (int k = 0; kinds && k < SR_MATERIAL_KIND_COUNT; ++k)
+        cJSON_AddNumberToObject(kinds, sr_material_kind_name((sr_material_kind)k),
                                 (double)st->triangles_by_kind[k]);
     cJSON_AddNumberToObject(o, "kinds_present", st->kinds_present);
     cJSON *lights = cJSON_AddObjectToObject(o, "lights");
     if (lights) {
-        sluice_area_lights al;
-        sluice_scene_area_lights(s, &al);
+        sr_area_lights al;
+        sr_scene_area_lights(s, &al);
         cJSON_AddNumberToObject(lights, "point", (double)st->point_lights);
         cJSON_AddNumberToObject(lights, "emissive_triangles", (double)st->emissive_triangles);
         cJSON_AddNumberToObject(lights, "emissive_area", al.total_area);
@@ -191,11 +189,11 @@ static cJSON *stats_json(const sluice_scene *s)
         cJSON_AddNumberToObject(ren, "light_samples", r->light_samples);
         cJSON_AddNumberToObject(ren, "photons", r->photons);
         cJSON_AddNumberToObject(ren, "photon_lookup", r->photon_lookup);
-        cJSON_AddStringToObject(ren, "mode", sluice_render_mode_name(r->mode));
+        cJSON_AddStringToObject(ren, "mode", sr_render_mode_name(r->mode));
     }
     cJSON_AddNumberToObject(o, "degenerate_dropped", (double)st->degenerate_dropped);
     cJSON *warn = cJSON_AddArrayToObject(o, "warnings");
-    const char *w = sluice_scene_warnings(s);
+    const char *w = sr_scene_warnings(s);
     char line[1024];
     while (warn && *w) {
         const char *nl = strchr(w, '\n');
@@ -212,7 +210,7 @@ int main(int argc, char **argv)
 {
     const char *input = NULL;
     int json = 0;
-    sluice_scene_load_options opts = {0};
+    sr_scene_load_options opts = {0};
     for (int i = 1; i < argc; ++i) {
         if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
             usage(stdout);
@@ -223,7 +221,7 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--json") == 0) {
             json = 1;
         } else if (strcmp(argv[i], "--allow-no-light") == 0) {
-            opts.flags |= SLUICE_SCENE_ALLOW_NO_LIGHT;
+            opts.flags |= SR_SCENE_ALLOW_NO_LIGHT;
         } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
             fprintf(stderr, "sluice-scene: unknown option %s\n", argv[i]);
             usage(stderr);
@@ -240,8 +238,8 @@ int main(int argc, char **argv)
         return 2;
     }
     char err[1024];
-    sluice_scene *s = NULL;
-    sluice_status st = sluice_scene_load(input, &opts, &s, err, sizeof err);
+    sr_scene *s = NULL;
+    sluice_status st = sr_scene_load(input, &opts, &s, err, sizeof err);
     if (st != SLUICE_OK) {
         fprintf(stderr, "sluice-scene: %s\n", err);
         return 1;
@@ -261,6 +259,6 @@ int main(int argc, char **argv)
     } else {
         print_text(s);
     }
-    sluice_scene_destroy(s);
+    sr_scene_destroy(s);
     return rc;
 }

@@ -102,11 +102,11 @@ typedef struct rt_grid_args {
 } rt_grid_args;
 
 /**
- * A material as the shader reads it (a reduced sluice_material): kind,
+ * A material as the shader reads it (a reduced sr_material): kind,
  * colours and the two scalars. 48 bytes.
  */
 typedef struct rt_material {
-    rt_u32 kind; /* sluice_material_kind */
+    rt_u32 kind; /* sr_material_kind */
     float ar, ag, ab;
     float sr, sg, sb;
     float exponent, ior;
