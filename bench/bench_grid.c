@@ -13,7 +13,7 @@
  */
 #include "bench_args.h"
 #include "grid.h"
-#include "rt_kernels.h"
+#include "kernels.h"
 #include "scene.h"
 
 #include <errno.h>
@@ -48,7 +48,7 @@ static double program_seconds(sluice_context *ctx)
     double t0 = now();
     sluice_program *p = NULL;
     sluice_kernel *k = NULL;
-    if (rt_program_create(ctx, (const char *[]){"tri_box.h", "grid.cl"}, 2, NULL, &p) == SLUICE_OK)
+    if (sr_program_create(ctx, (const char *[]){"tri_box.h", "grid.cl"}, 2, NULL, &p) == SLUICE_OK)
         sluice_kernel_create(p, "rt_grid_count", &k);
     double t = now() - t0;
     sluice_kernel_destroy(k);

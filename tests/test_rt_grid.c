@@ -8,7 +8,7 @@
 #include "grid.h"
 #include "scene.h"
 
-#include "../kernels/raytrace/tri_box.h"
+#include "../kernels/render/tri_box.h"
 
 #include <math.h>
 #include <string.h>

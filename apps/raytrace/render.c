@@ -127,15 +127,7 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     sr_scene_area_lights(sc, &al);
     f->area_lights = (rt_u32)al.count;
     f->area_total = (float)al.total_area;
-    float diag = 0, maxabs = 0;
-    for (int k = 0; k < 3; ++k) {
-        float e = ss->bounds_max[k] - ss->bounds_min[k];
-        diag += e * e;
-        maxabs = fmaxf(maxabs, fmaxf(fabsf(ss->bounds_max[k]), fabsf(ss->bounds_min[k])));
-    }
-    /* secondary rays start this far off the surface: relative to the scene's
-     * size, and at least some 32 ulps of its largest coordinate */
-    f->scene_eps = 1e-4f * sqrtf(diag) + 4e-6f * maxabs;
+    f->scene_eps = rt_tracer_scene(t)->scene_eps;
 
     unsigned mode = opt->mode;
     int specular_kinds = (ss->kinds_present &
@@ -219,8 +211,10 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
         st = sluice_kernel_set_output(k, 3, 0, r->shadow, SLUICE_UNORDERED);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_output(k, 4, 1, r->next, SLUICE_UNORDERED);
-    sluice_stream *bufs[] = {r->accum,     t->tri_vertices, t->indices,   t->normals, t->tri_mat,
-                             t->materials, t->point_lights, t->area_tris, t->area_cdf};
+    const sr_device_scene *ds = rt_tracer_scene(t);
+    sluice_stream *bufs[] = {r->accum,         ds->tri_records, ds->indices,
+                             ds->normals,      ds->tri_mat,     ds->materials,
+                             ds->point_lights, ds->area_tris,   ds->area_cdf};
     for (unsigned i = 0; i < 9 && st == SLUICE_OK; ++i)
         st = sluice_kernel_set_stream(k, 5 + i, bufs[i], 0);
     if (st == SLUICE_OK)

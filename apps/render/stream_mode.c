@@ -151,12 +151,12 @@ static sluice_status prepare(rt_tracer *t, size_t n)
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(t->k_intersect, 7, t->grid.cell_tris, 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(t->k_intersect, 8, t->tri_vertices, 0);
+        st = sluice_kernel_set_stream(t->k_intersect, 8, t->ds->tri_records, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(t->k_intersect, 9, sizeof t->grid_args, &t->grid_args);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(t->k_intersect, 10,
-                                      t->list_records ? t->list_records : t->tri_vertices, 0);
+                                      t->list_records ? t->list_records : t->ds->tri_records, 0);
 
     /* rt_route(codes, ids, trav, isect): after a traverse pass into
      * (trav_out, isect_in), after an intersect pass into (trav_in,

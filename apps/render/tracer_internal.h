@@ -17,17 +17,10 @@ struct rt_tracer {
     rt_grid_device grid;
     rt_grid_args grid_args;
 
-    /* scene data on the device */
-    sluice_stream *positions;    /* float x3 per vertex */
-    sluice_stream *indices;      /* uint x3 per triangle */
-    sluice_stream *tri_vertices; /* float x9 per triangle: v0, e1, e2 (or v0, v1, v2) */
-    sluice_stream *normals;      /* float x3 per vertex (one zero record when none) */
-    sluice_stream *tri_mat;      /* uint per triangle */
-    sluice_stream *materials;    /* rt_material */
-    sluice_stream *point_lights; /* rt_point_light */
-    sluice_stream *area_tris;    /* uint */
-    sluice_stream *area_cdf;     /* float */
-    size_t scene_bytes;
+    /* the scene on the device: its triangle records are in the layout the
+     * intersector reads (SR_TRI_EDGES for Moller-Trumbore) */
+    sr_device_scene *ds;
+    size_t list_copy_bytes; /* the list-order copy below */
 
     /* fused mode walking ahead (rt_fused.cl): the list-order copy of the
      * triangle records (NULL when the walk gathers instead) */

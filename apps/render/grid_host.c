@@ -1,5 +1,5 @@
 /* The uniform grid built in plain C (grid.h): the reference the device build
- * is tested against, with the same overlap test (kernels/raytrace/tri_box.h)
+ * is tested against, with the same overlap test (kernels/render/tri_box.h)
  * in the same float arithmetic. Purcell (3.2) leaves the build out of the
  * ray tracer's cost; here it is a counting sort of (voxel, triangle) pairs,
  * generated in triangle order so that every voxel's list comes out
@@ -8,7 +8,7 @@
 
 #include "app_error.h"
 
-#include "../../kernels/raytrace/tri_box.h"
+#include "../../kernels/render/tri_box.h"
 
 #include <stdlib.h>
 #include <string.h>

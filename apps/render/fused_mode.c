@@ -18,11 +18,12 @@ sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 4, t->grid.cell_tris, 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, 5, t->tri_vertices, 0);
+        st = sluice_kernel_set_stream(k, 5, t->ds->tri_records, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(k, 6, sizeof t->grid_args, &t->grid_args);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, 7, t->list_records ? t->list_records : t->tri_vertices, 0);
+        st = sluice_kernel_set_stream(k, 7, t->list_records ? t->list_records : t->ds->tri_records,
+                                      0);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(k);
     uint32_t c[RT_CTR_TRACE_COUNT];

@@ -1,5 +1,5 @@
 /* The uniform grid build on the device (apps/raytrace/grid_device.c; Purcell
- * 3.2 and 5.2.1). rt_program_create prepends tri_box.h, which holds the
+ * 3.2 and 5.2.1). sr_program_create prepends tri_box.h, which holds the
  * overlap test shared with the C build: the two builds make the same
  * decisions bit for bit.
  *

@@ -2,7 +2,7 @@
 #include "tracer_internal.h"
 #include "app_error.h"
 
-#include "rt_kernels.h"
+#include "kernels.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -33,111 +33,6 @@ rt_tracer_options rt_tracer_options_default(void)
     return o;
 }
 
-/* Creates a stream of max(count, 1) records and uploads `count` of them. */
-static sluice_status upload(rt_tracer *t, size_t record, size_t count, const void *data,
-                            sluice_stream **out)
-{
-    sluice_status st = sluice_stream_create(t->ctx, record, count ? count : 1, out);
-    if (st == SLUICE_OK && count)
-        st = sluice_stream_upload(*out, data, count);
-    if (st == SLUICE_OK)
-        t->scene_bytes += record * (count ? count : 1);
-    return st;
-}
-
-static sluice_status upload_scene(rt_tracer *t)
-{
-    const sr_scene *s = t->scene;
-    size_t nv = sr_scene_vertex_count(s), nt = sr_scene_triangle_count(s);
-    const float *pos = sr_scene_positions(s);
-    const uint32_t *idx = sr_scene_indices(s);
-    sluice_status st = upload(t, 12, nv, pos, &t->positions);
-    if (st == SLUICE_OK)
-        st = upload(t, 12, nt, idx, &t->indices);
-    if (st == SLUICE_OK)
-        st = upload(t, 4, nt, sr_scene_triangle_materials(s), &t->tri_mat);
-    if (st != SLUICE_OK)
-        return st;
-
-    /* Triangle records: the intersector reads one 36-byte record per
-     * triangle instead of three indices and three gathers (Purcell 4.2
-     * keeps vertices in a texture indexed by triangle, the same idea). For
-     * Moller-Trumbore they hold (v0, v1 - v0, v2 - v0), the edges rounded as
-     * the test would round them; for the watertight test the vertices
-     * (kernels/raytrace/rt_trace.cl). */
-    float *tv = malloc((nt ? nt : 1) * 9 * sizeof *tv);
-    if (!tv)
-        return SLUICE_ERROR_OUT_OF_MEMORY;
-    int edges = t->opt.intersector == RT_ISECT_MT;
-    for (size_t i = 0; i < nt; ++i) {
-        const float *v0 = pos + 3 * (size_t)idx[3 * i];
-        for (int k = 0; k < 3; ++k) {
-            const float *v = pos + 3 * (size_t)idx[3 * i + k];
-            for (int a = 0; a < 3; ++a)
-                tv[9 * i + 3 * k + a] = edges && k > 0 ? v[a] - v0[a] : v[a];
-        }
-    }
-    st = upload(t, 36, nt, tv, &t->tri_vertices);
-    free(tv);
-    if (st != SLUICE_OK)
-        return st;
-
-    const float *normals = sr_scene_normals(s);
-    static const float zero[3] = {0, 0, 0};
-    st = normals ? upload(t, 12, nv, normals, &t->normals) : upload(t, 12, 1, zero, &t->normals);
-    if (st != SLUICE_OK)
-        return st;
-
-    size_t nm = sr_scene_material_count(s);
-    const sr_material *mats = sr_scene_materials(s);
-    rt_material *rm = calloc(nm ? nm : 1, sizeof *rm);
-    if (!rm)
-        return SLUICE_ERROR_OUT_OF_MEMORY;
-    for (size_t i = 0; i < nm; ++i) {
-        rm[i].kind = (rt_u32)mats[i].kind;
-        rm[i].ar = mats[i].albedo[0];
-        rm[i].ag = mats[i].albedo[1];
-        rm[i].ab = mats[i].albedo[2];
-        rm[i].sr = mats[i].specular[0];
-        rm[i].sg = mats[i].specular[1];
-        rm[i].sb = mats[i].specular[2];
-        rm[i].exponent = mats[i].exponent;
-        rm[i].ior = mats[i].ior;
-        rm[i].er = mats[i].emission[0];
-        rm[i].eg = mats[i].emission[1];
-        rm[i].eb = mats[i].emission[2];
-    }
-    st = upload(t, sizeof *rm, nm, rm, &t->materials);
-    free(rm);
-    if (st != SLUICE_OK)
-        return st;
-
-    size_t np = sr_scene_point_light_count(s);
-    const sr_point_light *pl = sr_scene_point_lights(s);
-    rt_point_light *rp = calloc(np ? np : 1, sizeof *rp);
-    if (!rp)
-        return SLUICE_ERROR_OUT_OF_MEMORY;
-    for (size_t i = 0; i < np; ++i) {
-        rp[i].px = pl[i].position[0];
-        rp[i].py = pl[i].position[1];
-        rp[i].pz = pl[i].position[2];
-        rp[i].ir = pl[i].intensity[0];
-        rp[i].ig = pl[i].intensity[1];
-        rp[i].ib = pl[i].intensity[2];
-    }
-    st = upload(t, sizeof *rp, np, rp, &t->point_lights);
-    free(rp);
-    if (st != SLUICE_OK)
-        return st;
-
-    sr_area_lights al;
-    sr_scene_area_lights(s, &al);
-    st = upload(t, 4, al.count, al.triangles, &t->area_tris);
-    if (st == SLUICE_OK)
-        st = upload(t, 4, al.count, al.area_cdf, &t->area_cdf);
-    return st;
-}
-
 static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
 {
     const sr_scene_stats *ss = sr_scene_statistics(t->scene);
@@ -153,7 +48,7 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
     if (st != SLUICE_OK)
         return st;
     if (t->opt.grid_build == RT_GRID_BUILD_DEVICE) {
-        st = rt_grid_build_device(t->ctx, &desc, t->positions, t->indices, nt, &t->grid);
+        st = rt_grid_build_device(t->ctx, &desc, t->ds->positions, t->ds->indices, nt, &t->grid);
         if (st != SLUICE_OK)
             sr_set_error(err, err_size, "grid: %s", sluice_context_error(t->ctx));
     } else {
@@ -261,7 +156,7 @@ static sluice_status build_list_copy(rt_tracer *t)
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 0, t->grid.cell_tris, 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, 1, t->tri_vertices, 0);
+        st = sluice_kernel_set_stream(k, 1, t->ds->tri_records, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(k, 2, sizeof entries, &entries);
     if (st == SLUICE_OK)
@@ -272,7 +167,7 @@ static sluice_status build_list_copy(rt_tracer *t)
         st = sluice_context_finish(t->ctx);
     sluice_kernel_destroy(k);
     if (st == SLUICE_OK)
-        t->scene_bytes += 10 * sizeof(float) * t->list_stride;
+        t->list_copy_bytes = 10 * sizeof(float) * t->list_stride;
     return st;
 }
 
@@ -325,7 +220,7 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
 #undef SKIP
     static const char *const names[] = {"rt_types.h",   "rt_trace.cl", "rt_lanes.cl",
                                         "rt_stream.cl", "rt_fused.cl", "rt_shade.cl"};
-    sluice_status st = rt_program_create(t->ctx, names, 6, opts, &t->program);
+    sluice_status st = sr_program_create(t->ctx, names, 6, opts, &t->program);
     if (st == SLUICE_OK)
         st = sluice_program_build(t->program);
     if (st != SLUICE_OK) {
@@ -377,9 +272,9 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sr_scene *scene,
     t->ctx = ctx;
     t->scene = scene;
     t->opt = o;
-    sluice_status st = upload_scene(t);
-    if (st != SLUICE_OK)
-        sr_set_error(err, err_size, "scene upload: %s", sluice_context_error(ctx));
+    sluice_status st = sr_device_scene_create(
+        ctx, scene, o.intersector == RT_ISECT_WATERTIGHT ? SR_TRI_VERTICES : SR_TRI_EDGES, &t->ds,
+        err, err_size);
     if (st == SLUICE_OK)
         st = build_grid(t, err, err_size);
     if (st == SLUICE_OK)
@@ -428,10 +323,7 @@ void rt_tracer_destroy(rt_tracer *t)
     sluice_stream_destroy(t->host_hits);
     rt_grid_device_free(&t->grid);
     sluice_stream_destroy(t->list_records);
-    sluice_stream *s[] = {t->positions, t->indices,      t->tri_vertices, t->normals, t->tri_mat,
-                          t->materials, t->point_lights, t->area_tris,    t->area_cdf};
-    for (size_t i = 0; i < sizeof s / sizeof *s; ++i)
-        sluice_stream_destroy(s[i]);
+    sr_device_scene_destroy(t->ds);
     free(t);
 }
 
@@ -523,12 +415,17 @@ const rt_grid_device *rt_tracer_grid(const rt_tracer *t)
 
 size_t rt_tracer_scene_bytes(const rt_tracer *t)
 {
-    return t ? t->scene_bytes : 0;
+    return t ? t->ds->bytes + t->list_copy_bytes : 0;
 }
 
 size_t rt_tracer_stream_bytes(const rt_tracer *t)
 {
     return t ? t->state_capacity * (5 * sizeof(uint32_t) + sizeof(rt_walk)) : 0;
+}
+
+const sr_device_scene *rt_tracer_scene(const rt_tracer *t)
+{
+    return t ? t->ds : NULL;
 }
 
 const rt_tracer_options *rt_tracer_get_options(const rt_tracer *t)

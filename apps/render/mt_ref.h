@@ -3,7 +3,7 @@
  * plain C, for the references that check and race the kernels (the brute
  * force of tests/test_raytrace.c, the C grid tracer of bench/bench_raytrace.c).
  *
- * It rounds exactly as rt_intersect_tri (kernels/raytrace/rt_trace.cl) and
+ * It rounds exactly as rt_intersect_tri (kernels/render/rt_trace.cl) and
  * rt_intersect16_core (rt_lanes.cl) do: the same operations in the same
  * order, with fused multiply-adds at the same places and nowhere else. So
  * a reference disagrees with the kernels only where the grid makes them test

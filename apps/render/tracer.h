@@ -15,7 +15,7 @@
  *   RT_EXEC_FUSED   one kernel takes each ray through the whole grid (the
  *                   MIMD form, Purcell 5.2.2 "branching").
  *
- * Both run the same functions (kernels/raytrace/rt_trace.cl) and find the
+ * Both run the same functions (kernels/render/rt_trace.cl) and find the
  * same hits. The renderer (render.h) drives whole images with this; tests
  * call rt_tracer_trace() on rays of their own.
  *
@@ -26,7 +26,8 @@
 #ifndef SLUICE_RT_TRACER_H
 #define SLUICE_RT_TRACER_H
 
-#include "../../kernels/raytrace/rt_types.h"
+#include "../../kernels/render/rt_types.h"
+#include "device_scene.h"
 #include "grid.h"
 #include "scene.h"
 #include "sluice/sluice.h"
@@ -49,7 +50,7 @@ typedef enum rt_grid_build {
     RT_GRID_BUILD_HOST = 1    /**< in plain C, then uploaded */
 } rt_grid_build;
 
-/** How the fused mode's packets move through the grid (kernels/raytrace/rt_fused.cl). */
+/** How the fused mode's packets move through the grid (kernels/render/rt_fused.cl). */
 typedef enum rt_fused_walk {
     RT_WALK_AUTO = 0, /**< walk ahead when at most half of the voxels hold triangles */
     RT_WALK_OFF = 1,  /**< a voxel at a time: each voxel's tests before the next step */
@@ -148,9 +149,14 @@ void rt_tracer_reset_stats(rt_tracer *t);
 const rt_grid_device *rt_tracer_grid(const rt_tracer *t);
 
 /** Device bytes the scene's data take (vertices, triangles, materials,
- *  lights), and those the tracer's own streams take now. */
+ *  lights, and the tracer's list-order copy of the triangle records), and
+ *  those the tracer's own streams take now. */
 size_t rt_tracer_scene_bytes(const rt_tracer *t);
 size_t rt_tracer_stream_bytes(const rt_tracer *t);
+
+/** The scene on the device that the tracer uploaded (its triangle records in
+ *  the layout its intersector reads), for the renderers that shade its hits. */
+const sr_device_scene *rt_tracer_scene(const rt_tracer *t);
 
 /** The options the tracer was created with. */
 const rt_tracer_options *rt_tracer_get_options(const rt_tracer *t);

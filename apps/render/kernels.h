@@ -1,6 +1,6 @@
-/* The ray tracer's OpenCL sources (kernels/raytrace/), embedded into the app
- * at build time (tools/embed_kernels.py --function), and programs built from
- * them. */
+/* The renderers' OpenCL sources (kernels/render/, kernels/raytrace/,
+ * kernels/photonmap/), embedded once into the render layer at build time
+ * (tools/embed_kernels.py --function), and programs built from them. */
 #ifndef SLUICE_RT_KERNELS_H
 #define SLUICE_RT_KERNELS_H
 
@@ -10,7 +10,7 @@
 
 /** The text of the embedded source with base name `name` ("grid.cl"), or
  *  NULL when there is none. Generated. */
-const char *rt_kernel_text(const char *name);
+const char *sr_kernel_text(const char *name);
 
 /**
  * Creates a program from embedded sources concatenated in the order given
@@ -19,7 +19,7 @@ const char *rt_kernel_text(const char *name);
  * and line. `options` are OpenCL build options (may be NULL); the program is
  * built lazily by the runtime, when its first kernel is created.
  */
-sluice_status rt_program_create(sluice_context *ctx, const char *const *names, size_t count,
+sluice_status sr_program_create(sluice_context *ctx, const char *const *names, size_t count,
                                 const char *options, sluice_program **out);
 
 #endif /* SLUICE_RT_KERNELS_H */

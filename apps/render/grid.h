@@ -145,7 +145,7 @@ typedef struct rt_grid_host {
  *  `positions` are 3 floats per vertex, `indices` 3 per triangle (trusted to
  *  be in range: the vertex count is not known here). For each triangle the
  *  voxels of its bounding box (clamped to the grid) are tested with the
- *  exact overlap test of kernels/raytrace/tri_box.h, each voxel enlarged by
+ *  exact overlap test of kernels/render/tri_box.h, each voxel enlarged by
  *  RT_GRID_EPS of its edge on every side, so a triangle on a shared face,
  *  edge or corner is listed in every voxel that touches it. Fails with
  *  SLUICE_ERROR_INVALID_ARGUMENT for a bad description or a triangle with a

@@ -1,7 +1,7 @@
 /*
  * Triangle-voxel overlap for the uniform grid (Purcell 3.2, 5.2.1), written
  * once for both builds of the grid: grid_host.c includes this file as C, and
- * the device build prepends it to grid.cl as OpenCL C (rt_program_create).
+ * the device build prepends it to grid.cl as OpenCL C (sr_program_create).
  *
  * The test is the separating axis test of Akenine-Moeller ("Fast 3D
  * triangle-box overlap testing", 2001): a triangle and a box are disjoint

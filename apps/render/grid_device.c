@@ -1,5 +1,5 @@
 /* The uniform grid built on the device with the stream algorithms (grid.h,
- * kernels/raytrace/grid.cl). Purcell (3.2) builds the grid offline; his
+ * kernels/render/grid.cl). Purcell (3.2) builds the grid offline; his
  * photon map (6.2.2) shows the streaming way to bin items into a grid: sort
  * them by cell, then index the cells. Here the items are (voxel, triangle)
  * pairs:
@@ -19,10 +19,10 @@
  * those (most triangles of a fine mesh) without loading them again. */
 #include "grid.h"
 
-#include "rt_kernels.h"
+#include "kernels.h"
 #include "sluice/streams.h"
 
-#include "../../kernels/raytrace/tri_box.h"
+#include "../../kernels/render/tri_box.h"
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -178,7 +178,7 @@ sluice_status rt_grid_build_device_limit(sluice_context *ctx, const rt_grid_desc
     build b = {0};
     uint64_t total = 0;
     const char *step = "creating the kernels";
-    st = rt_program_create(ctx, (const char *[]){"tri_box.h", "grid.cl"}, 2, NULL, &b.prog);
+    st = sr_program_create(ctx, (const char *[]){"tri_box.h", "grid.cl"}, 2, NULL, &b.prog);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(b.prog, "rt_grid_count", &b.k_count);
     if (st == SLUICE_OK)
