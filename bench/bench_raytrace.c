@@ -96,7 +96,7 @@ static rt_ray *eye_rays(const sr_scene *sc, unsigned w, unsigned h)
 {
     rt_frame f;
     memset(&f, 0, sizeof f);
-    rt_camera_frame(sr_scene_camera(sc), w, h, &f);
+    sr_camera_frame(sr_scene_camera(sc), w, h, &f);
     rt_ray *rays = xmalloc((size_t)w * h * sizeof *rays);
     size_t n = 0;
     for (unsigned ty = 0; ty < h; ty += 8)
@@ -452,7 +452,6 @@ static rt_tracer *make_tracer(const sr_scene *sc, rt_exec exec, unsigned min_dim
         o.unroll_tests = unroll;
     }
     o.grid_min_dim = min_dim;
-    o.render_mode = RT_MODE_CAST;
     rt_tracer *t = NULL;
     double t0 = now();
     if (rt_tracer_create(ctx, sc, &o, &t, err, sizeof err) != SLUICE_OK) {

@@ -162,13 +162,12 @@ static sr_scene *load(const char *name)
 }
 
 static rt_tracer *make_tracer_walk(const sr_scene *s, rt_exec exec, rt_intersector isect,
-                                   unsigned mode, rt_fused_walk walk, size_t list_copy_max)
+                                   rt_fused_walk walk, size_t list_copy_max)
 {
     char err[1024];
     rt_tracer_options o = rt_tracer_options_default();
     o.exec = exec;
     o.intersector = isect;
-    o.render_mode = mode;
     o.fused_walk = walk;
     o.list_copy_max = list_copy_max;
     rt_tracer *t = NULL;
@@ -177,9 +176,9 @@ static rt_tracer *make_tracer_walk(const sr_scene *s, rt_exec exec, rt_intersect
     return t;
 }
 
-static rt_tracer *make_tracer(const sr_scene *s, rt_exec exec, rt_intersector isect, unsigned mode)
+static rt_tracer *make_tracer(const sr_scene *s, rt_exec exec, rt_intersector isect)
 {
-    return make_tracer_walk(s, exec, isect, mode, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT);
+    return make_tracer_walk(s, exec, isect, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT);
 }
 
 static size_t total_rays_checked;
@@ -209,8 +208,8 @@ static void check_against_bf(const char *name, const sr_scene *s, rt_ray *rays, 
         {"fused walk", RT_EXEC_FUSED, RT_WALK_ON, RT_LIST_COPY_MAX_DEFAULT, "list copy"},
         {"fused walk, gather", RT_EXEC_FUSED, RT_WALK_ON, 0, "no list copy"}};
     for (size_t e = 0; e < sizeof paths / sizeof *paths; ++e) {
-        rt_tracer *t = make_tracer_walk(s, paths[e].exec, RT_ISECT_MT, RT_MODE_CAST, paths[e].walk,
-                                        paths[e].copy_max);
+        rt_tracer *t =
+            make_tracer_walk(s, paths[e].exec, RT_ISECT_MT, paths[e].walk, paths[e].copy_max);
         if (!t)
             break;
         CHECK(strstr(rt_tracer_fused_path(t), paths[e].path), "%s: fused path \"%s\"",
@@ -321,7 +320,7 @@ static void test_one_triangle_and_edges(void)
     s = load("cornell");
     if (!s)
         return;
-    rt_tracer *t = make_tracer(s, RT_EXEC_FUSED, RT_ISECT_MT, RT_MODE_CAST);
+    rt_tracer *t = make_tracer(s, RT_EXEC_FUSED, RT_ISECT_MT);
     if (!t) {
         sr_scene_destroy(s);
         return;
@@ -514,8 +513,7 @@ static void leak_test(const char *name, const sr_scene *s, const float c[3], flo
     for (int k = 0; k < LK_CATEGORIES; ++k)
         printf(" %zu %s%s", per_cat[k], lk_names[k], k + 1 < LK_CATEGORIES ? "," : "\n");
     for (int w = 0; w < 2; ++w) {
-        rt_tracer *t =
-            make_tracer(s, RT_EXEC_FUSED, w ? RT_ISECT_WATERTIGHT : RT_ISECT_MT, RT_MODE_CAST);
+        rt_tracer *t = make_tracer(s, RT_EXEC_FUSED, w ? RT_ISECT_WATERTIGHT : RT_ISECT_MT);
         if (!t)
             continue;
         CHECK_OK(ctx, rt_tracer_trace(t, rays, n, hits));
@@ -580,7 +578,7 @@ static const char *const mode_names[] = {"cast", "shadow", "whitted", "path"};
 static sr_image *render(const sr_scene *s, rt_exec exec, unsigned mode, unsigned w, unsigned h,
                         unsigned spp, uint32_t seed)
 {
-    rt_tracer *t = make_tracer(s, exec, RT_ISECT_MT, mode);
+    rt_tracer *t = make_tracer(s, exec, RT_ISECT_MT);
     if (!t)
         return NULL;
     const sr_render_settings *rs = sr_scene_render_settings(s);

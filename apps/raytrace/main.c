@@ -4,6 +4,7 @@
  * progress and checkpoints, writes the image and the statistics.
  */
 #include "progress.h"
+#include "skipped.h"
 #include "render.h"
 #include "stats.h"
 #include "tracer.h"
@@ -294,7 +295,6 @@ int main(int argc, char **argv)
         sr_scene_destroy(scene);
         return 2;
     }
-    c.topt.render_mode = ro.mode;
 
     sluice_context_options co;
     memset(&co, 0, sizeof co);
@@ -367,7 +367,10 @@ int main(int argc, char **argv)
     rep.grid = rt_tracer_grid(tracer);
     rep.scene_bytes = rt_tracer_scene_bytes(tracer);
     rep.tracer_stream_bytes = rt_tracer_stream_bytes(tracer);
-    rep.skipped = rt_tracer_skipped(tracer);
+    char skipped[768];
+    snprintf(skipped, sizeof skipped, "%s", rt_renderer_skipped(rend));
+    sr_skipped_add(skipped, sizeof skipped, 1, rt_tracer_skipped(tracer));
+    rep.skipped = skipped;
     rep.fused_path = rt_tracer_fused_path(tracer);
     rep.interrupted = interrupted;
     if (!c.quiet)

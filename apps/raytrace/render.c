@@ -2,7 +2,8 @@
 #include "render.h"
 #include "app_error.h"
 
-#include "tracer_internal.h"
+#include "kernels.h"
+#include "skipped.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -21,53 +22,16 @@ struct rt_renderer {
     rt_tracer *t;
     rt_render_options opt;
     rt_frame frame;
+    const sr_device_scene *ds;
+    sluice_program *program; /* camera.cl and rt_shade.cl, built for the mode and scene */
     sluice_kernel *k_raygen, *k_shade, *k_resolve;
     sluice_counters *counters;
-    sluice_stream *rays, *next, *hits, *shadow, *shadow_hits, *accum;
+    sr_film *film;
+    sluice_stream *rays, *next, *hits, *shadow, *shadow_hits;
+    char skipped[384];
     size_t per_shadow, per_secondary;
     rt_render_stats stats;
 };
-
-static void sub3(const float a[3], const float b[3], float o[3])
-{
-    for (int k = 0; k < 3; ++k)
-        o[k] = a[k] - b[k];
-}
-
-static void norm3(float v[3])
-{
-    float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (l > 0)
-        for (int k = 0; k < 3; ++k)
-            v[k] /= l;
-}
-
-static void cross3(const float a[3], const float b[3], float o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-void rt_camera_frame(const sr_camera *cam, unsigned width, unsigned height, rt_frame *f)
-{
-    float fwd[3], right[3], up[3];
-    sub3(cam->look_at, cam->eye, fwd);
-    norm3(fwd);
-    cross3(fwd, cam->up, right);
-    norm3(right);
-    cross3(right, fwd, up);
-    float hh = tanf(cam->vfov * 0.5f * 3.14159265358979f / 180.0f);
-    float hw = hh * (float)width / (float)height;
-    for (int k = 0; k < 3; ++k) {
-        f->eye[k] = cam->eye[k];
-        f->corner[k] = fwd[k] - right[k] * hw + up[k] * hh;
-        f->du[k] = right[k] * (2.0f * hw / (float)width);
-        f->dv[k] = -up[k] * (2.0f * hh / (float)height);
-    }
-    f->width = width;
-    f->height = height;
-}
 
 void rt_renderer_destroy(rt_renderer *r)
 {
@@ -76,8 +40,10 @@ void rt_renderer_destroy(rt_renderer *r)
     sluice_kernel_destroy(r->k_raygen);
     sluice_kernel_destroy(r->k_shade);
     sluice_kernel_destroy(r->k_resolve);
+    sluice_program_destroy(r->program);
     sluice_counters_destroy(r->counters);
-    sluice_stream *s[] = {r->rays, r->next, r->hits, r->shadow, r->shadow_hits, r->accum};
+    sr_film_destroy(r->film);
+    sluice_stream *s[] = {r->rays, r->next, r->hits, r->shadow, r->shadow_hits};
     for (size_t i = 0; i < sizeof s / sizeof *s; ++i)
         sluice_stream_destroy(s[i]);
     free(r);
@@ -91,7 +57,46 @@ static size_t bytes_of(sluice_stream *s)
 static void update_bytes(rt_renderer *r)
 {
     r->stats.stream_bytes = bytes_of(r->rays) + bytes_of(r->next) + bytes_of(r->hits) +
-                            bytes_of(r->shadow) + bytes_of(r->shadow_hits) + bytes_of(r->accum);
+                            bytes_of(r->shadow) + bytes_of(r->shadow_hits) + sr_film_bytes(r->film);
+}
+
+/* The shading program: eye rays and shading built for the render mode and
+ * the scene, so that code neither needs is not compiled (Purcell builds only
+ * what a scene needs); r->skipped says what was left out. */
+static sluice_status build_program(rt_renderer *r, const sr_scene_stats *ss)
+{
+    unsigned mode = r->opt.mode;
+    int traces_specular = mode == RT_MODE_WHITTED || mode == RT_MODE_PATH;
+    int mirror = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_MIRROR));
+    int glass = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_GLASS));
+    char opts[160];
+    snprintf(opts, sizeof opts, "%s%s%s%s",
+             r->ds->layout == SR_TRI_VERTICES ? " -DRT_WATERTIGHT" : "",
+             mirror ? " -DRT_HAS_MIRROR" : "", glass ? " -DRT_HAS_GLASS" : "",
+             ss->has_normals ? " -DRT_HAS_NORMALS" : "");
+    char *k = r->skipped;
+    size_t n = sizeof r->skipped;
+    k[0] = '\0';
+    sr_skipped_add(k, n, traces_specular && !mirror && !glass,
+                   "reflection kernels and passes (no mirror or glass)");
+    sr_skipped_add(k, n, traces_specular && (mirror || glass) && !glass,
+                   "refraction code (no glass)");
+    sr_skipped_add(k, n, !traces_specular, "reflection/refraction (mode does not trace them)");
+    sr_skipped_add(k, n, mode != RT_MODE_CAST && sr_scene_light_count(r->ds->scene) == 0,
+                   "shadow pass (no lights)");
+    sr_skipped_add(k, n, mode != RT_MODE_CAST && ss->point_lights == 0,
+                   "point-light shadow rays (none)");
+    sr_skipped_add(k, n, mode != RT_MODE_CAST && ss->emissive_triangles == 0,
+                   "area-light sampling (none)");
+    sr_skipped_add(k, n, mode == RT_MODE_CAST, "shadow pass (cast mode)");
+    sr_skipped_add(k, n, !ss->has_normals, "normal interpolation (no vertex normals)");
+    static const char *const names[] = {"rt_types.h", "triangle.cl", "rng.cl",    "film.cl",
+                                        "surface.cl", "lights.cl",   "camera.cl", "rt_shade.cl"};
+    sluice_status st =
+        sr_program_create(r->ds->ctx, names, sizeof names / sizeof *names, opts, &r->program);
+    if (st == SLUICE_OK)
+        st = sluice_program_build(r->program);
+    return st;
 }
 
 sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_renderer **out,
@@ -113,11 +118,12 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     }
     r->t = t;
     r->opt = *opt;
-    const sr_scene *sc = t->scene;
+    r->ds = rt_tracer_scene(t);
+    const sr_scene *sc = r->ds->scene;
     const sr_scene_stats *ss = sr_scene_statistics(sc);
     rt_frame *f = &r->frame;
     memset(f, 0, sizeof *f);
-    rt_camera_frame(sr_scene_camera(sc), opt->width, opt->height, f);
+    sr_camera_frame(sr_scene_camera(sc), opt->width, opt->height, f);
     f->seed = opt->seed;
     f->mode = opt->mode;
     f->max_depth = opt->max_depth;
@@ -127,7 +133,7 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     sr_scene_area_lights(sc, &al);
     f->area_lights = (rt_u32)al.count;
     f->area_total = (float)al.total_area;
-    f->scene_eps = rt_tracer_scene(t)->scene_eps;
+    f->scene_eps = r->ds->scene_eps;
 
     unsigned mode = opt->mode;
     int specular_kinds = (ss->kinds_present &
@@ -141,12 +147,14 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
         r->per_secondary = 2;
 
     size_t pixels = (size_t)opt->width * opt->height;
-    sluice_context *ctx = t->ctx;
-    sluice_status st = sluice_kernel_create(t->program, "rt_raygen", &r->k_raygen);
+    sluice_context *ctx = r->ds->ctx;
+    sluice_status st = build_program(r, ss);
     if (st == SLUICE_OK)
-        st = sluice_kernel_create(t->program, "rt_shade", &r->k_shade);
+        st = sluice_kernel_create(r->program, "rt_raygen", &r->k_raygen);
     if (st == SLUICE_OK)
-        st = sluice_kernel_create(t->program, "rt_shadow_resolve", &r->k_resolve);
+        st = sluice_kernel_create(r->program, "rt_shade", &r->k_shade);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(r->program, "rt_shadow_resolve", &r->k_resolve);
     static const char *const names[] = {"shades",  "shadow", "reflect",
                                         "refract", "path",   "nonfinite"};
     if (st == SLUICE_OK)
@@ -167,12 +175,7 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     if (st == SLUICE_OK)
         st = sluice_stream_create(ctx, sizeof(rt_hit), shadow_cap, &r->shadow_hits);
     if (st == SLUICE_OK)
-        st = sluice_stream_create(ctx, 3 * sizeof(int64_t), pixels, &r->accum);
-    if (st == SLUICE_OK) {
-        void *zero = calloc(pixels, 3 * sizeof(int64_t));
-        st = zero ? sluice_stream_upload(r->accum, zero, pixels) : SLUICE_ERROR_OUT_OF_MEMORY;
-        free(zero);
-    }
+        st = sr_film_create(ctx, opt->width, opt->height, &r->film, NULL, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_counters(r->k_shade, r->counters);
     if (st == SLUICE_OK)
@@ -212,9 +215,9 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
     if (st == SLUICE_OK)
         st = sluice_kernel_set_output(k, 4, 1, r->next, SLUICE_UNORDERED);
     const sr_device_scene *ds = rt_tracer_scene(t);
-    sluice_stream *bufs[] = {r->accum,         ds->tri_records, ds->indices,
-                             ds->normals,      ds->tri_mat,     ds->materials,
-                             ds->point_lights, ds->area_tris,   ds->area_cdf};
+    sluice_stream *bufs[] = {
+        sr_film_accum(r->film), ds->tri_records,  ds->indices,   ds->normals, ds->tri_mat,
+        ds->materials,          ds->point_lights, ds->area_tris, ds->area_cdf};
     for (unsigned i = 0; i < 9 && st == SLUICE_OK; ++i)
         st = sluice_kernel_set_stream(k, 5 + i, bufs[i], 0);
     if (st == SLUICE_OK)
@@ -231,7 +234,7 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
         if (st == SLUICE_OK)
             st = sluice_kernel_set_stream(r->k_resolve, 1, r->shadow_hits, 0);
         if (st == SLUICE_OK)
-            st = sluice_kernel_set_stream(r->k_resolve, 2, r->accum, 0);
+            st = sluice_kernel_set_stream(r->k_resolve, 2, sr_film_accum(r->film), 0);
         if (st == SLUICE_OK)
             st = sluice_kernel_launch(r->k_resolve);
     }
@@ -304,36 +307,20 @@ sluice_status rt_renderer_image(rt_renderer *r, sr_image *img, size_t *bad_pixel
 {
     if (bad_pixels)
         *bad_pixels = 0;
-    if (!r || !img || sr_image_width(img) != r->opt.width ||
-        sr_image_height(img) != r->opt.height || sr_image_channels(img) != 3)
+    if (!r)
         return SLUICE_ERROR_INVALID_ARGUMENT;
-    size_t pixels = (size_t)r->opt.width * r->opt.height;
-    int64_t *acc = malloc(pixels * 3 * sizeof *acc);
-    if (!acc)
-        return SLUICE_ERROR_OUT_OF_MEMORY;
-    sluice_status st = sluice_stream_download(r->accum, acc, pixels, NULL);
-    if (st == SLUICE_OK) {
-        float *px = sr_image_pixels(img);
-        double scale = 1.0 / ((double)RT_FIXED_SCALE * (r->stats.samples ? r->stats.samples : 1));
-        size_t bad = 0;
-        for (size_t i = 0; i < pixels; ++i) {
-            int ok = 1;
-            float v[3];
-            for (int k = 0; k < 3; ++k) {
-                v[k] = (float)((double)acc[3 * i + k] * scale);
-                ok &= isfinite(v[k]) != 0;
-            }
-            if (!ok) {
-                ++bad;
-                v[0] = v[1] = v[2] = 0.0f;
-            }
-            memcpy(px + 3 * i, v, sizeof v);
-        }
-        if (bad_pixels)
-            *bad_pixels = bad;
-    }
-    free(acc);
-    return st;
+    return sr_film_resolve(r->film, 1.0 / (r->stats.samples ? r->stats.samples : 1), img,
+                           bad_pixels);
+}
+
+sr_film *rt_renderer_film(rt_renderer *r)
+{
+    return r ? r->film : NULL;
+}
+
+const char *rt_renderer_skipped(const rt_renderer *r)
+{
+    return r ? r->skipped : "";
 }
 
 const rt_render_stats *rt_renderer_stats(const rt_renderer *r)

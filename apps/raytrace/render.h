@@ -17,6 +17,8 @@
 #define SLUICE_RT_RENDER_H
 
 #include "image.h"
+#include "camera.h"
+#include "film.h"
 #include "tracer.h"
 
 /** What to render. */
@@ -55,11 +57,15 @@ sluice_status rt_renderer_sample(rt_renderer *r);
  *  `*bad_pixels` (may be NULL) and writes 0 there instead. */
 sluice_status rt_renderer_image(rt_renderer *r, sr_image *img, size_t *bad_pixels);
 
+/** The film the samples accumulate in (its scale is 1 / samples). */
+sr_film *rt_renderer_film(rt_renderer *r);
+
+/** What the renderer left out for this scene and mode (sr_skipped_add),
+ *  e.g. "refraction code (no glass)"; the tracer's list is separate
+ *  (rt_tracer_skipped). */
+const char *rt_renderer_skipped(const rt_renderer *r);
+
 /** Statistics so far. */
 const rt_render_stats *rt_renderer_stats(const rt_renderer *r);
-
-/** Fills the camera frame for `cam` seen at width x height (exposed for
- *  tests of the camera). */
-void rt_camera_frame(const sr_camera *cam, unsigned width, unsigned height, rt_frame *f);
 
 #endif

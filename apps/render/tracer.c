@@ -3,6 +3,7 @@
 #include "app_error.h"
 
 #include "kernels.h"
+#include "skipped.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -27,7 +28,6 @@ rt_tracer_options rt_tracer_options_default(void)
     o.unroll_steps = 32;
     o.unroll_tests = 64;
     o.ordered = 0;
-    o.render_mode = RT_MODE_SHADOW;
     o.fused_walk = RT_WALK_AUTO;
     o.list_copy_max = RT_LIST_COPY_MAX_DEFAULT;
     return o;
@@ -173,11 +173,6 @@ static sluice_status build_list_copy(rt_tracer *t)
 
 static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
 {
-    const sr_scene_stats *ss = sr_scene_statistics(t->scene);
-    unsigned mode = t->opt.render_mode;
-    int traces_specular = mode == RT_MODE_WHITTED || mode == RT_MODE_PATH;
-    int mirror = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_MIRROR));
-    int glass = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_GLASS));
     char opts[384], walk[96] = "";
     if (!t->walks_ahead && t->list_stride)
         snprintf(walk, sizeof walk, " -DRT_LIST_COPY -DRT_LIST_STRIDE=%zuu", t->list_stride);
@@ -186,40 +181,19 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
                  RT_WALK_VOXELS, t->list_stride);
     else if (t->walks_ahead)
         snprintf(walk, sizeof walk, " -DRT_FUSED_WALK=%d", RT_WALK_VOXELS);
-    snprintf(opts, sizeof opts, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s%s%s%s",
+    snprintf(opts, sizeof opts, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s",
              t->opt.unroll_steps, t->opt.unroll_tests,
-             t->opt.intersector == RT_ISECT_WATERTIGHT ? " -DRT_WATERTIGHT" : "",
-             mirror ? " -DRT_HAS_MIRROR" : "", glass ? " -DRT_HAS_GLASS" : "",
-             ss->has_normals ? " -DRT_HAS_NORMALS" : "", walk);
-    /* what the scene lets us leave out (Purcell builds only what a scene needs) */
-    char *p = t->skipped;
-    size_t left = sizeof t->skipped;
-    p[0] = '\0';
-#define SKIP(cond, text)                                                                           \
-    do {                                                                                           \
-        if (cond) {                                                                                \
-            int w = snprintf(p, left, "%s%s", p == t->skipped ? "" : "; ", text);                  \
-            if (w > 0 && (size_t)w < left) {                                                       \
-                p += w;                                                                            \
-                left -= (size_t)w;                                                                 \
-            }                                                                                      \
-        }                                                                                          \
-    } while (0)
-    SKIP(traces_specular && !mirror && !glass,
-         "reflection kernels and passes (no mirror or glass)");
-    SKIP(traces_specular && (mirror || glass) && !glass, "refraction code (no glass)");
-    SKIP(!traces_specular, "reflection/refraction (mode does not trace them)");
-    SKIP(mode != RT_MODE_CAST && sr_scene_light_count(t->scene) == 0, "shadow pass (no lights)");
-    SKIP(mode != RT_MODE_CAST && ss->point_lights == 0, "point-light shadow rays (none)");
-    SKIP(mode != RT_MODE_CAST && ss->emissive_triangles == 0, "area-light sampling (none)");
-    SKIP(mode == RT_MODE_CAST, "shadow pass (cast mode)");
-    SKIP(!ss->has_normals, "normal interpolation (no vertex normals)");
-    SKIP(1, "empty voxels (never sent to the intersector)");
-    SKIP(t->opt.exec == RT_EXEC_STREAM && t->opt.intersector == RT_ISECT_MT && !t->list_stride,
-         "list-order copy of the triangle records (over list_copy_max: intersect passes gather)");
-#undef SKIP
-    static const char *const names[] = {"rt_types.h",   "rt_trace.cl", "rt_lanes.cl",
-                                        "rt_stream.cl", "rt_fused.cl", "rt_shade.cl"};
+             t->opt.intersector == RT_ISECT_WATERTIGHT ? " -DRT_WATERTIGHT" : "", walk);
+    /* what the scene lets the tracer leave out */
+    t->skipped[0] = '\0';
+    sr_skipped_add(t->skipped, sizeof t->skipped, 1,
+                   "empty voxels (never sent to the intersector)");
+    sr_skipped_add(
+        t->skipped, sizeof t->skipped,
+        t->opt.exec == RT_EXEC_STREAM && t->opt.intersector == RT_ISECT_MT && !t->list_stride,
+        "list-order copy of the triangle records (over list_copy_max: intersect passes gather)");
+    static const char *const names[] = {"rt_types.h",  "triangle.cl",  "rt_trace.cl",
+                                        "rt_lanes.cl", "rt_stream.cl", "rt_fused.cl"};
     sluice_status st = sr_program_create(t->ctx, names, 6, opts, &t->program);
     if (st == SLUICE_OK)
         st = sluice_program_build(t->program);

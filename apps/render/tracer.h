@@ -72,9 +72,6 @@ typedef struct rt_tracer_options {
     unsigned unroll_steps;     /**< stream mode: voxels per traverse pass (k) */
     unsigned unroll_tests;     /**< stream mode: triangle tests per intersect pass (m) */
     int ordered;               /**< stream mode: ORDERED outputs (else UNORDERED) */
-    /** Render mode the shading kernels are built for (RT_MODE_*), so that
-     *  code a scene or mode does not need is not compiled. */
-    unsigned render_mode;
     /** Fused mode, Moller-Trumbore: walk ahead or a voxel at a time. Both
      *  give the same hits and counts; walking ahead is faster on sparse
      *  grids (bunny 10-20%, teapotahedron 20%), slower on dense ones
@@ -92,7 +89,7 @@ typedef struct rt_tracer_options {
  *  per pass (Purcell's own k = m = 1 passes are 2-10x more: measured slower
  *  here; k = 32, m = 64 against 16 and 32 measured 14-27% faster on bunny,
  *  teapotahedron and spheres:1000, cornell within noise, tracer.c),
- *  unordered, RT_MODE_SHADOW, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT. */
+ *  unordered, RT_WALK_AUTO, RT_LIST_COPY_MAX_DEFAULT. */
 rt_tracer_options rt_tracer_options_default(void);
 
 /** What tracing has cost so far (Purcell Fig. 5.2, Tables 5.2 and 5.4). */
@@ -139,6 +136,11 @@ sluice_status rt_tracer_trace(rt_tracer *t, const rt_ray *rays, size_t n, rt_hit
 sluice_status rt_tracer_trace_stream(rt_tracer *t, sluice_stream *rays, size_t n,
                                      sluice_stream *hits);
 
+/** Reads the largest per-ray voxel and test counts of the traces since the
+ *  last call into the statistics (max_steps, max_tests). A blocking read:
+ *  rt_tracer_trace_stream leaves it to the caller, once per image or pass. */
+sluice_status rt_tracer_collect_maxima(rt_tracer *t);
+
 /** Statistics since creation or the last reset. */
 const rt_trace_stats *rt_tracer_stats(const rt_tracer *t);
 
@@ -166,8 +168,8 @@ const rt_tracer_options *rt_tracer_get_options(const rt_tracer *t);
  *  stream mode. */
 const char *rt_tracer_fused_path(const rt_tracer *t);
 
-/** A text listing what the scene lets the tracer skip (kernels not compiled,
- *  passes not run), e.g. "refraction (no glass); reflection (no mirror)". */
+/** A text listing what the tracer skips (sr_skipped_add), e.g. "empty voxels
+ *  (never sent to the intersector)". */
 const char *rt_tracer_skipped(const rt_tracer *t);
 
 #endif /* SLUICE_RT_TRACER_H */

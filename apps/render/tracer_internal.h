@@ -58,7 +58,4 @@ sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice
 /* Frees the stream mode's loop and streams (stream_mode.c). */
 void rt_stream_release(rt_tracer *t);
 
-/* Reads the per-ray maxima into the statistics and zeroes them. */
-sluice_status rt_tracer_collect_maxima(rt_tracer *t);
-
 #endif

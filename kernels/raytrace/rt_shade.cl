@@ -1,6 +1,7 @@
 /*
- * rt_shade.cl: eye-ray generation and shading, the first and last kernels of
- * Purcell's Fig. 3.1, and the counter-based random numbers they use.
+ * rt_shade.cl: the ray tracer's shading, the last kernel of Purcell's Fig.
+ * 3.1, for the cast, shadow, Whitted and path modes (eye rays come from
+ * kernels/render/camera.cl).
  *
  * A shade pass reads each ray with its hit and adds what it can to the pixel
  * at once (emission, a cast-mode headlight), and emits new rays for what it
@@ -8,229 +9,15 @@
  * them (output 0) and reflection, refraction or path rays that carry their
  * weight (output 1). Those streams go through traversal and intersection
  * again, so there is no recursion anywhere (Purcell 3.1, "shading").
- *
- * Pixels accumulate in 64-bit fixed point (RT_FIXED_SCALE) with atomic adds:
- * integer sums do not depend on the order in which rays finish, so the same
- * seed gives the same image bit for bit.
+ * Pixels accumulate through kernels/render/film.cl.
  *
  * Build options: RT_HAS_MIRROR, RT_HAS_GLASS (reflection and refraction code
- * is compiled only when the scene has such materials), RT_HAS_NORMALS.
+ * is compiled only when the scene has such materials), RT_HAS_NORMALS,
+ * RT_WATERTIGHT (the layout of the triangle records).
  * Shade counters: 0 shading calculations, 1 shadow rays, 2 reflection rays,
  * 3 refraction rays, 4 path rays, 5 non-finite contributions dropped.
  */
-#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
-
-#define RT_PI 3.14159265358979323846f
-
-/* ------------------------------------------------------------------ */
-/* Random numbers: a hash of (key, dimension), no state, no atomics     */
-/* ------------------------------------------------------------------ */
-
-/* A 32-bit integer hash with good avalanche (the "lowbias32" constants). */
-inline uint rt_hash(uint x)
-{
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
-
-inline uint rt_key(uint a, uint b)
-{
-    return rt_hash(a ^ rt_hash(b + 0x9e3779b9u));
-}
-
-/* A uniform number in [0, 1) for dimension `dim` of the path keyed `key`. */
-inline float rt_rand(uint key, uint dim)
-{
-    return (float)(rt_key(key, dim) >> 8) * (1.0f / 16777216.0f);
-}
-
-/* ------------------------------------------------------------------ */
-/* Accumulation                                                         */
-/* ------------------------------------------------------------------ */
-
-/* Adds colour `c` to pixel `p`; non-finite values are dropped (and counted
- * by the caller), so no NaN or Inf ever reaches the image. */
-inline int rt_add(global long *accum, uint p, float3 c)
-{
-    if (!(isfinite(c.x) && isfinite(c.y) && isfinite(c.z)))
-        return 1;
-    c = clamp(c, 0.0f, 1.0e6f);
-    if (c.x > 0.0f)
-        atom_add(&accum[3u * p + 0u], (long)(c.x * RT_FIXED_SCALE));
-    if (c.y > 0.0f)
-        atom_add(&accum[3u * p + 1u], (long)(c.y * RT_FIXED_SCALE));
-    if (c.z > 0.0f)
-        atom_add(&accum[3u * p + 2u], (long)(c.z * RT_FIXED_SCALE));
-    return 0;
-}
-
-/* ------------------------------------------------------------------ */
-/* Eye rays                                                            */
-/* ------------------------------------------------------------------ */
-
-/* One eye ray per pixel, in 8x8 tiles so that neighbouring rays (which take
- * nearly the same path through the grid) are neighbours in the stream. The
- * launch covers whole tiles; positions outside the image emit nothing.
- * Output 0 (ordered) receives the rays. */
-__kernel void rt_raygen(SLUICE_PARAMS, global rt_ray *rays, const rt_frame f)
-{
-    SLUICE_FOR_EACH (i) {
-        uint tiles_x = (f.width + 7u) / 8u;
-        uint tile = i / 64u, within = i % 64u;
-        uint x = (tile % tiles_x) * 8u + within % 8u;
-        uint y = (tile / tiles_x) * 8u + within / 8u;
-        int inside = x < f.width && y < f.height;
-        uint at = SLUICE_EMIT_INDEX(0, inside);
-        if (SLUICE_WRITING && inside) {
-            uint pixel = y * f.width + x;
-            uint key = rt_key(rt_key(f.seed, pixel), f.sample);
-            float jx = 0.5f, jy = 0.5f;
-            if (f.jitter) {
-                jx = rt_rand(key, 0u);
-                jy = rt_rand(key, 1u);
-            }
-            float px = (float)x + jx, py = (float)y + jy;
-            float3 d = (float3)(f.corner[0] + f.du[0] * px + f.dv[0] * py,
-                                f.corner[1] + f.du[1] * px + f.dv[1] * py,
-                                f.corner[2] + f.du[2] * px + f.dv[2] * py);
-            d = normalize(d);
-            rt_ray r;
-            r.ox = f.eye[0];
-            r.oy = f.eye[1];
-            r.oz = f.eye[2];
-            r.dx = d.x;
-            r.dy = d.y;
-            r.dz = d.z;
-            r.tmin = 0.0f;
-            r.tmax = INFINITY;
-            r.wr = r.wg = r.wb = 1.0f;
-            r.pixel = pixel;
-            r.key = key;
-            r.flags = RT_KIND_EYE | RT_FLAG_COUNT_EMIT;
-            r.pad0 = r.pad1 = 0u;
-            rays[at] = r;
-        }
-    }
-}
-
-/* ------------------------------------------------------------------ */
-/* Shading                                                             */
-/* ------------------------------------------------------------------ */
-
-/* Everything about the surface at a hit. */
-typedef struct rt_surface {
-    float3 p;  /* hit point */
-    float3 ng; /* geometric normal, facing the incoming ray */
-    float3 n;  /* shading normal, facing the incoming ray */
-    int front; /* the ray hit the front side (the emitting side) */
-    rt_material m;
-} rt_surface;
-
-inline rt_surface rt_surface_at(const rt_ray *ray, const rt_hit *h, global const float *tv,
-                                global const uint *indices, global const float *normals,
-                                global const uint *tri_mat, global const rt_material *mats)
-{
-    rt_surface s;
-    float3 o = (float3)(ray->ox, ray->oy, ray->oz), d = (float3)(ray->dx, ray->dy, ray->dz);
-    float3 v0, e1, e2;
-    rt_tri_edges(tv, h->tri, &v0, &e1, &e2);
-    s.p = o + d * h->t;
-    float3 ng = normalize(cross(e1, e2));
-    s.front = dot(ng, d) < 0.0f;
-    float3 n = ng;
-#ifdef RT_HAS_NORMALS
-    uint3 idx = vload3(h->tri, indices);
-    float3 n0 = vload3(idx.x, normals), n1 = vload3(idx.y, normals), n2 = vload3(idx.z, normals);
-    if (dot(n0, n0) > 0.0f && dot(n1, n1) > 0.0f && dot(n2, n2) > 0.0f) {
-        float3 ns = n0 * (1.0f - h->u - h->v) + n1 * h->u + n2 * h->v;
-        if (dot(ns, ns) > 0.0f)
-            n = normalize(ns);
-    }
-#else
-    (void)indices;
-    (void)normals;
-#endif
-    if (!s.front) {
-        ng = -ng;
-        n = -n;
-    }
-    /* an interpolated normal facing away from the viewer is not usable */
-    if (dot(n, d) >= 0.0f)
-        n = ng;
-    s.ng = ng;
-    s.n = n;
-    s.m = mats[tri_mat[h->tri]];
-    return s;
-}
-
-inline float3 rt_albedo(const rt_material *m)
-{
-    return (float3)(m->ar, m->ag, m->ab);
-}
-
-inline float3 rt_specular(const rt_material *m)
-{
-    return (float3)(m->sr, m->sg, m->sb);
-}
-
-/* The BRDF for direct light from `wi` seen from `wo` (both away from the
- * surface). Mirrors and glass, which a shadow ray cannot light, are shaded as
- * diffuse surfaces of their tint in the modes that do not trace them. */
-inline float3 rt_brdf(const rt_material *m, float3 n, float3 wi, float3 wo)
-{
-    if (m->kind == 3u) { /* glossy: modified Blinn-Phong (scene.h) */
-        float3 h = normalize(wi + wo);
-        float c = fmax(dot(n, h), 0.0f);
-        return rt_albedo(m) / RT_PI +
-               rt_specular(m) * ((m->exponent + 2.0f) / (2.0f * RT_PI) * pow(c, m->exponent));
-    }
-    if (m->kind == 1u || m->kind == 2u)
-        return rt_specular(m) / RT_PI;
-    return rt_albedo(m) / RT_PI;
-}
-
-/* A ray from `p` in direction `d`, offset along `ng` (towards the side the
- * ray leaves) so that it does not hit its own surface. */
-inline rt_ray rt_spawn(float3 p, float3 off, float3 d, float tmax, float3 w, uint pixel, uint key,
-                       uint flags)
-{
-    rt_ray r;
-    float3 o = p + off;
-    r.ox = o.x;
-    r.oy = o.y;
-    r.oz = o.z;
-    r.dx = d.x;
-    r.dy = d.y;
-    r.dz = d.z;
-    r.tmin = 0.0f;
-    r.tmax = tmax;
-    r.wr = w.x;
-    r.wg = w.y;
-    r.wb = w.z;
-    r.pixel = pixel;
-    r.key = key;
-    r.flags = flags;
-    r.pad0 = r.pad1 = 0u;
-    return r;
-}
-
-inline float rt_max3(float3 v)
-{
-    return fmax(v.x, fmax(v.y, v.z));
-}
-
-/* Schlick's approximation of the Fresnel reflectance of a dielectric. */
-inline float rt_fresnel(float cos_i, float cos_t, int entering, float ior)
-{
-    float r0 = (1.0f - ior) / (1.0f + ior);
-    r0 *= r0;
-    float c = 1.0f - (entering ? cos_i : cos_t);
-    return r0 + (1.0f - r0) * c * c * c * c * c;
-}
+#include "sluice.cl"
 
 #define RT_EMIT_SHADOW(cond, ray) SLUICE_EMIT_IF(0, shadow, ray, cond)
 #define RT_EMIT_SECONDARY(cond, ray) SLUICE_EMIT_IF(1, secondary, ray, cond)
@@ -289,22 +76,9 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
             /* pick an emissive triangle by area, then a uniform point on it */
             float u0 = rt_rand(ray.key, 16u + 3u * k), u1 = rt_rand(ray.key, 17u + 3u * k),
                   u2 = rt_rand(ray.key, 18u + 3u * k);
-            uint lo = 0u, hi = f.area_lights - 1u;
-            while (lo < hi) {
-                uint mid = (lo + hi) / 2u;
-                if (area_cdf[mid] >= u0)
-                    hi = mid;
-                else
-                    lo = mid + 1u;
-            }
-            uint lt = area_tris[lo];
-            float3 a, e1, e2;
-            rt_tri_edges(tv, lt, &a, &e1, &e2);
-            float su = sqrt(u1);
-            /* uniform on the triangle (Shirley and Chiu's square-to-triangle map) */
-            float3 q = a + e1 * (su * (1.0f - u2)) + e2 * (su * u2);
-            float3 lnc = cross(e1, e2);
-            float3 ln = normalize(lnc);
+            float3 q, ln;
+            uint lt = rt_area_light_sample(u0, u1, u2, f.area_lights, area_tris, area_cdf, tv, &q,
+                                           &ln);
             rt_material lm = mats[tri_mat[lt]];
             float3 L = q - s.p;
             float d2 = dot(L, L), dist = sqrt(d2);
@@ -378,14 +152,7 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
              * shadow rays already (next-event estimation), so it does not
              * count emission. Russian roulette after two bounces. */
             float r1 = rt_rand(ray.key, 4u), r2 = rt_rand(ray.key, 5u), r3 = rt_rand(ray.key, 6u);
-            float3 n = s.n;
-            float sign = n.z >= 0.0f ? 1.0f : -1.0f;
-            float a = -1.0f / (sign + n.z), b = n.x * n.y * a;
-            float3 t1 = (float3)(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
-            float3 t2 = (float3)(b, sign + n.y * n.y * a, -n.y);
-            float phi = 2.0f * RT_PI * r1, sr = sqrt(r2);
-            float3 wi = normalize(t1 * (cos(phi) * sr) + t2 * (sin(phi) * sr) +
-                                  n * sqrt(fmax(0.0f, 1.0f - r2)));
+            float3 wi = rt_cosine_dir(s.n, r1, r2);
             float3 wb = w * rt_brdf(&s.m, s.n, wi, wo) * RT_PI;
             float q = 1.0f;
             if (depth >= 2u)

@@ -201,21 +201,6 @@ inline float16 rt_voxel_limit16(float16 t_exit, float16 tmax)
 /* Ray-triangle intersection                                           */
 /* ------------------------------------------------------------------ */
 
-/* Triangle `tri` of the triangle records as a vertex and two edges, in
- * either layout (see the top of this file). */
-inline void rt_tri_edges(global const float *tv, uint tri, float3 *v0, float3 *e1, float3 *e2)
-{
-    global const float *p = tv + 9u * (size_t)tri;
-    *v0 = vload3(0, p);
-#ifdef RT_WATERTIGHT
-    *e1 = vload3(1, p) - *v0;
-    *e2 = vload3(2, p) - *v0;
-#else
-    *e1 = vload3(1, p);
-    *e2 = vload3(2, p);
-#endif
-}
-
 /* Tests triangle `tri` (from the triangle records, 9 floats per triangle)
  * and keeps it in `best` when it is hit in [tmin, limit] and nearer than
  * what `best` holds. Two-sided. */

@@ -31,7 +31,8 @@ typedef int32_t rt_i32;
 #define RT_KIND_REFLECT 2u
 #define RT_KIND_REFRACT 3u
 #define RT_KIND_PATH 4u
-#define RT_KIND_COUNT 5u
+#define RT_KIND_COUNT 5u  /* the kinds the ray tracer makes and counts */
+#define RT_KIND_PHOTON 5u /* a photon's flight (the photon mapper, Purcell 6.2.1) */
 #define RT_KIND_MASK 7u
 
 /* Other bits of rt_ray.flags. */

@@ -1,0 +1,44 @@
+/*
+ * lights.cl: sampling the scene's lights, for shadow rays (direct light) and
+ * for emitting photons (Purcell 6.2.1). Area lights are the emissive
+ * triangles, picked by area through their cumulative table (area_cdf) and
+ * sampled uniformly; point lights emit the same intensity in every direction.
+ */
+#ifndef SR_LIGHTS_CL
+#define SR_LIGHTS_CL
+
+/* Picks an emissive triangle with probability proportional to its area (u0)
+ * and a uniform point `*q` on it (u1, u2; Shirley and Chiu's square-to-
+ * triangle map); writes its unit normal (the emitting side) to `*ln` and
+ * returns the triangle. `count` is the number of emissive triangles (> 0). */
+inline uint rt_area_light_sample(float u0, float u1, float u2, uint count,
+                                 global const uint *area_tris, global const float *area_cdf,
+                                 global const float *tv, float3 *q, float3 *ln)
+{
+    uint lo = 0u, hi = count - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (area_cdf[mid] >= u0)
+            hi = mid;
+        else
+            lo = mid + 1u;
+    }
+    uint lt = area_tris[lo];
+    float3 a, e1, e2;
+    rt_tri_edges(tv, lt, &a, &e1, &e2);
+    float su = sqrt(u1);
+    *q = a + e1 * (su * (1.0f - u2)) + e2 * (su * u2);
+    *ln = normalize(cross(e1, e2));
+    return lt;
+}
+
+/* A uniform direction on the unit sphere (pdf 1 / (4 pi)). */
+inline float3 rt_uniform_sphere(float u1, float u2)
+{
+    float z = 1.0f - 2.0f * u1;
+    float r = sqrt(fmax(0.0f, 1.0f - z * z));
+    float phi = 2.0f * RT_PI * u2;
+    return (float3)(r * cos(phi), r * sin(phi), z);
+}
+
+#endif

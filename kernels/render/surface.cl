@@ -1,0 +1,137 @@
+/*
+ * surface.cl: what a renderer knows about the surface at a hit (position,
+ * geometric and shading normals, material), the BRDFs, Fresnel reflectance,
+ * direction sampling and spawning rays off a surface. Shared by the ray
+ * tracer's shading and the photon mapper's photon tracing and shading, so
+ * both see the same materials (apps/common/scene.h describes them).
+ */
+#ifndef SR_SURFACE_CL
+#define SR_SURFACE_CL
+
+#define RT_PI 3.14159265358979323846f
+
+/* Everything about the surface at a hit. */
+typedef struct rt_surface {
+    float3 p;  /* hit point */
+    float3 ng; /* geometric normal, facing the incoming ray */
+    float3 n;  /* shading normal, facing the incoming ray */
+    int front; /* the ray hit the front side (the emitting side) */
+    rt_material m;
+} rt_surface;
+
+inline rt_surface rt_surface_at(const rt_ray *ray, const rt_hit *h, global const float *tv,
+                                global const uint *indices, global const float *normals,
+                                global const uint *tri_mat, global const rt_material *mats)
+{
+    rt_surface s;
+    float3 o = (float3)(ray->ox, ray->oy, ray->oz), d = (float3)(ray->dx, ray->dy, ray->dz);
+    float3 v0, e1, e2;
+    rt_tri_edges(tv, h->tri, &v0, &e1, &e2);
+    s.p = o + d * h->t;
+    float3 ng = normalize(cross(e1, e2));
+    s.front = dot(ng, d) < 0.0f;
+    float3 n = ng;
+#ifdef RT_HAS_NORMALS
+    uint3 idx = vload3(h->tri, indices);
+    float3 n0 = vload3(idx.x, normals), n1 = vload3(idx.y, normals), n2 = vload3(idx.z, normals);
+    if (dot(n0, n0) > 0.0f && dot(n1, n1) > 0.0f && dot(n2, n2) > 0.0f) {
+        float3 ns = n0 * (1.0f - h->u - h->v) + n1 * h->u + n2 * h->v;
+        if (dot(ns, ns) > 0.0f)
+            n = normalize(ns);
+    }
+#else
+    (void)indices;
+    (void)normals;
+#endif
+    if (!s.front) {
+        ng = -ng;
+        n = -n;
+    }
+    /* an interpolated normal facing away from the viewer is not usable */
+    if (dot(n, d) >= 0.0f)
+        n = ng;
+    s.ng = ng;
+    s.n = n;
+    s.m = mats[tri_mat[h->tri]];
+    return s;
+}
+
+inline float3 rt_albedo(const rt_material *m)
+{
+    return (float3)(m->ar, m->ag, m->ab);
+}
+
+inline float3 rt_specular(const rt_material *m)
+{
+    return (float3)(m->sr, m->sg, m->sb);
+}
+
+/* The BRDF for direct light from `wi` seen from `wo` (both away from the
+ * surface). Mirrors and glass, which a shadow ray cannot light, are shaded as
+ * diffuse surfaces of their tint in the modes that do not trace them. */
+inline float3 rt_brdf(const rt_material *m, float3 n, float3 wi, float3 wo)
+{
+    if (m->kind == 3u) { /* glossy: modified Blinn-Phong (scene.h) */
+        float3 h = normalize(wi + wo);
+        float c = fmax(dot(n, h), 0.0f);
+        return rt_albedo(m) / RT_PI +
+               rt_specular(m) * ((m->exponent + 2.0f) / (2.0f * RT_PI) * pow(c, m->exponent));
+    }
+    if (m->kind == 1u || m->kind == 2u)
+        return rt_specular(m) / RT_PI;
+    return rt_albedo(m) / RT_PI;
+}
+
+/* A ray from `p` in direction `d`, offset along `ng` (towards the side the
+ * ray leaves) so that it does not hit its own surface. */
+inline rt_ray rt_spawn(float3 p, float3 off, float3 d, float tmax, float3 w, uint pixel, uint key,
+                       uint flags)
+{
+    rt_ray r;
+    float3 o = p + off;
+    r.ox = o.x;
+    r.oy = o.y;
+    r.oz = o.z;
+    r.dx = d.x;
+    r.dy = d.y;
+    r.dz = d.z;
+    r.tmin = 0.0f;
+    r.tmax = tmax;
+    r.wr = w.x;
+    r.wg = w.y;
+    r.wb = w.z;
+    r.pixel = pixel;
+    r.key = key;
+    r.flags = flags;
+    r.pad0 = r.pad1 = 0u;
+    return r;
+}
+
+inline float rt_max3(float3 v)
+{
+    return fmax(v.x, fmax(v.y, v.z));
+}
+
+/* Schlick's approximation of the Fresnel reflectance of a dielectric. */
+inline float rt_fresnel(float cos_i, float cos_t, int entering, float ior)
+{
+    float r0 = (1.0f - ior) / (1.0f + ior);
+    r0 *= r0;
+    float c = 1.0f - (entering ? cos_i : cos_t);
+    return r0 + (1.0f - r0) * c * c * c * c * c;
+}
+
+/* A cosine-weighted direction about the unit normal `n` (pdf cos / pi), from
+ * two uniform numbers; the tangent frame is Duff et al.'s (JCGT 2017). */
+inline float3 rt_cosine_dir(float3 n, float r1, float r2)
+{
+    float sign = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n.z), b = n.x * n.y * a;
+    float3 t1 = (float3)(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    float3 t2 = (float3)(b, sign + n.y * n.y * a, -n.y);
+    float phi = 2.0f * RT_PI * r1, sr = sqrt(r2);
+    return normalize(t1 * (cos(phi) * sr) + t2 * (sin(phi) * sr) +
+                     n * sqrt(fmax(0.0f, 1.0f - r2)));
+}
+
+#endif
