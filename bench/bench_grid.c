@@ -11,6 +11,7 @@
  *
  * Default scenes: cornell, bunny (when its mesh is installed), million.
  */
+#include "clock.h"
 #include "bench_args.h"
 #include "grid.h"
 #include "kernels.h"
@@ -26,13 +27,6 @@
 #define MAX_SCENES 16
 #define BUNNY_PATH "/usr/share/glmark2/models/bunny.obj"
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 typedef struct result {
     const char *scene;
     size_t triangles, entries, bytes;
@@ -45,12 +39,12 @@ typedef struct result {
  * pays (PoCL serves the binary from its cache). */
 static double program_seconds(sluice_context *ctx)
 {
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     sluice_program *p = NULL;
     sluice_kernel *k = NULL;
     if (sr_program_create(ctx, (const char *[]){"tri_box.h", "grid.cl"}, 2, NULL, &p) == SLUICE_OK)
         sluice_kernel_create(p, "rt_grid_count", &k);
-    double t = now() - t0;
+    double t = sr_clock_seconds() - t0;
     sluice_kernel_destroy(k);
     sluice_program_destroy(p);
     return t;
@@ -87,9 +81,9 @@ static int run_scene(sluice_context *ctx, const char *name, unsigned min_dim, un
     int ok = 1;
     for (unsigned i = 0; i <= reps && ok; ++i) {
         rt_grid_host_free(&h);
-        double t0 = now();
+        double t0 = sr_clock_seconds();
         ok = rt_grid_build_host(&d, pos, idx, nt, &h, err, sizeof err) == SLUICE_OK;
-        double t = now() - t0;
+        double t = sr_clock_seconds() - t0;
         if (i > 0 && (i == 1 || t < r->c_seconds))
             r->c_seconds = t;
     }
@@ -106,10 +100,10 @@ static int run_scene(sluice_context *ctx, const char *name, unsigned min_dim, un
              sluice_context_finish(ctx) == SLUICE_OK;
     for (unsigned i = 0; i <= reps && ok; ++i) {
         rt_grid_device_free(&g);
-        double t0 = now();
+        double t0 = sr_clock_seconds();
         ok = rt_grid_build_device(ctx, &d, sp, si, nt, &g) == SLUICE_OK &&
              sluice_context_finish(ctx) == SLUICE_OK;
-        double t = now() - t0;
+        double t = sr_clock_seconds() - t0;
         if (!ok)
             fprintf(stderr, "bench_grid: %s: device build: %s\n", name, g.message);
         if (i > 0 && (i == 1 || t < r->device_seconds))

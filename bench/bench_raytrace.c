@@ -33,6 +33,7 @@
  * Exit status 1 when a Sluice mode or the C tracer disagrees with another on
  * more than 1% of the pixels (a broken tracer), 2 on setup errors.
  */
+#include "clock.h"
 #include "bench_args.h"
 #include "grid.h"
 #include "mt_ref.h"
@@ -57,13 +58,6 @@
 #define PROG "bench_raytrace"
 #define MAX_SCENES 8
 #define BUNNY_PATH "/usr/share/glmark2/models/bunny.obj"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static sluice_context *ctx;
 
@@ -342,7 +336,7 @@ static double emb_frame(RTCScene scene, const rt_ray *rays, unsigned w, unsigned
 {
     emb_job jobs[2];
     pthread_t th[2];
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     for (unsigned i = 0; i < threads; ++i) {
         jobs[i] = (emb_job){scene, rays, w, h, tri, t, packet, i, threads};
         if (i > 0 && pthread_create(&th[i], NULL, emb_worker, &jobs[i]) != 0) {
@@ -353,7 +347,7 @@ static double emb_frame(RTCScene scene, const rt_ray *rays, unsigned w, unsigned
     emb_worker(&jobs[0]);
     for (unsigned i = 1; i < threads; ++i)
         pthread_join(th[i], NULL);
-    return now() - t0;
+    return sr_clock_seconds() - t0;
 }
 #endif
 
@@ -453,14 +447,14 @@ static rt_tracer *make_tracer(const sr_scene *sc, rt_exec exec, unsigned min_dim
     }
     o.grid_min_dim = min_dim;
     rt_tracer *t = NULL;
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     if (rt_tracer_create(ctx, sc, &o, &t, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, PROG ": rt_tracer_create: %s\n", err);
         exit(2);
     }
     TRY(sluice_context_finish(ctx));
     if (seconds)
-        *seconds = now() - t0;
+        *seconds = sr_clock_seconds() - t0;
     return t;
 }
 
@@ -479,10 +473,10 @@ static void keep_best(double *best, unsigned round, unsigned f, double s)
 static double sluice_frame(rt_tracer *t, sluice_stream *rays_s, size_t n, sluice_stream *hits_s)
 {
     TRY(sluice_context_finish(ctx));
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     TRY(rt_tracer_trace_stream(t, rays_s, n, hits_s));
     TRY(sluice_context_finish(ctx));
-    return now() - t0;
+    return sr_clock_seconds() - t0;
 }
 
 /* The hits a Sluice run left in hits_s, by pixel. */
@@ -502,10 +496,10 @@ static void sluice_hits(sluice_stream *hits_s, const rt_ray *rays, size_t n, pee
 /* One frame of the plain C tracer, one thread, timed. */
 static double c_frame(const cgrid *cg, const rt_ray *rays, size_t n, rt_hit *out)
 {
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     for (size_t i = 0; i < n; ++i)
         c_trace(cg, &rays[i], &out[i]);
-    return now() - t0;
+    return sr_clock_seconds() - t0;
 }
 
 static int run_scene(const char *name, unsigned size, unsigned reps, scene_result *res)
@@ -542,13 +536,13 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     rt_grid_host gh = {0};
     for (unsigned r = 0; r <= reps; ++r) {
         rt_grid_host_free(&gh);
-        double t0 = now();
+        double t0 = sr_clock_seconds();
         if (rt_grid_build_host(&desc, sr_scene_positions(sc), sr_scene_indices(sc), res->triangles,
                                &gh, err, sizeof err) != SLUICE_OK) {
             fprintf(stderr, PROG ": %s: grid: %s\n", name, err);
             exit(2);
         }
-        double s = now() - t0;
+        double s = sr_clock_seconds() - t0;
         keep_best(&res->grid_host_s, r, 0, s);
     }
     size_t cells = (size_t)desc.dims[0] * desc.dims[1] * desc.dims[2];
@@ -563,13 +557,13 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
         for (unsigned r = 0; r <= reps; ++r) {
             rt_grid_device g = {0};
             TRY(sluice_context_finish(ctx));
-            double t0 = now();
+            double t0 = sr_clock_seconds();
             if (rt_grid_build_device(ctx, &desc, sp, si, res->triangles, &g) != SLUICE_OK) {
                 fprintf(stderr, PROG ": %s: device grid: %s\n", name, g.message);
                 exit(2);
             }
             TRY(sluice_context_finish(ctx));
-            double s = now() - t0;
+            double s = sr_clock_seconds() - t0;
             rt_grid_device_free(&g);
             keep_best(&res->grid_device_s, r, 0, s);
         }
@@ -611,12 +605,12 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     }
     memcpy(vb, sr_scene_positions(sc), 3 * nv * sizeof(float));
     memcpy(ib, sr_scene_indices(sc), 3 * res->triangles * sizeof(uint32_t));
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     rtcCommitGeometry(geo);
     rtcAttachGeometry(es, geo);
     rtcReleaseGeometry(geo);
     rtcCommitScene(es);
-    res->emb_build_s = now() - t0;
+    res->emb_build_s = sr_clock_seconds() - t0;
     if (rtcGetDeviceError(dev) != RTC_ERROR_NONE) {
         fprintf(stderr, PROG ": Embree scene build failed\n");
         exit(2);
@@ -724,9 +718,9 @@ static int purcell_run(const char *name, unsigned size, unsigned min_dim, purcel
     rt_hit *hits = xmalloc(n * sizeof *hits);
     rt_tracer *t = make_tracer(sc, RT_EXEC_STREAM, min_dim, 1, NULL); /* Purcell's k = m = 1 */
     rt_tracer_reset_stats(t);
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     TRY(rt_tracer_trace(t, rays, n, hits));
-    double secs = now() - t0;
+    double secs = sr_clock_seconds() - t0;
     const rt_trace_stats *st = rt_tracer_stats(t);
     size_t hit = 0;
     for (size_t i = 0; i < n; ++i)

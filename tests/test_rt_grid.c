@@ -4,6 +4,7 @@
  * of the triangles (no voxel a triangle passes through may miss it), and the
  * device build against the C build, element by element, on random triangle
  * soups and on built-in scenes. */
+#include "clock.h"
 #include "check.h"
 #include "grid.h"
 #include "scene.h"
@@ -27,13 +28,6 @@
 #endif
 
 #define BUNNY_PATH "/usr/share/glmark2/models/bunny.obj"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* A uniform float in [a, b). */
 static float frand(uint32_t *s, float a, float b)
@@ -446,10 +440,10 @@ static void device_vs_host(sluice_context *ctx, const rt_grid_desc *d, const flo
     CHECK_OK(ctx, sluice_stream_upload(si, idx, nt));
     CHECK_OK(ctx, sluice_context_finish(ctx));
     rt_grid_device g;
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     sluice_status st = rt_grid_build_device(ctx, d, sp, si, nt, &g);
     sluice_context_finish(ctx);
-    double t1 = now();
+    double t1 = sr_clock_seconds();
     if (seconds)
         *seconds = t1 - t0;
     CHECK(st == SLUICE_OK, "%s: device build: %s: %s", what, sluice_status_string(st), g.message);
@@ -642,9 +636,9 @@ static void test_scene(sluice_context *ctx, const char *name, int compare_host)
     sr_scene_load_options o = {0};
     o.flags = SR_SCENE_ALLOW_NO_LIGHT;
     sr_scene *sc = NULL;
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     sluice_status st = sr_scene_load(name, &o, &sc, err, sizeof err);
-    double t_load = now() - t0;
+    double t_load = sr_clock_seconds() - t0;
     CHECK(st == SLUICE_OK, "loading %s: %s", name, err);
     if (st != SLUICE_OK)
         return;
@@ -663,10 +657,10 @@ static void test_scene(sluice_context *ctx, const char *name, int compare_host)
     double t_host = 0, t_dev = 0;
     size_t bytes = 0, entries = 0;
     if (compare_host > 0) {
-        t0 = now();
+        t0 = sr_clock_seconds();
         CHECK(rt_grid_build_host(&d, pos, idx, nt, &h, err, sizeof err) == SLUICE_OK, "%s: %s",
               name, err);
-        t_host = now() - t0;
+        t_host = sr_clock_seconds() - t0;
         device_vs_host(ctx, &d, pos, nv, idx, nt, &h, name, &t_dev, &bytes);
         if (h.cell_start)
             entries = h.cell_start[(size_t)d.dims[0] * d.dims[1] * d.dims[2]];
@@ -682,10 +676,10 @@ static void test_scene(sluice_context *ctx, const char *name, int compare_host)
         /* The first build also loads the kernels: report the best of a few. */
         for (int rep = 0; rep < (compare_host < 0 ? 5 : 1); ++rep) {
             rt_grid_device g;
-            t0 = now();
+            t0 = sr_clock_seconds();
             st = rt_grid_build_device(ctx, &d, sp, si, nt, &g);
             sluice_context_finish(ctx);
-            double t = now() - t0;
+            double t = sr_clock_seconds() - t0;
             if (rep == 0 || t < t_dev)
                 t_dev = t;
             if (compare_host < 0)
@@ -697,10 +691,10 @@ static void test_scene(sluice_context *ctx, const char *name, int compare_host)
         }
         if (compare_host < 0) {
             rt_grid_host h2;
-            t0 = now();
+            t0 = sr_clock_seconds();
             CHECK(rt_grid_build_host(&d, pos, idx, nt, &h2, err, sizeof err) == SLUICE_OK, "%s: %s",
                   name, err);
-            t_host = now() - t0;
+            t_host = sr_clock_seconds() - t0;
             printf("  C build: %.3f s\n", t_host);
             rt_grid_host_free(&h2);
         }

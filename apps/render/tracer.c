@@ -1,4 +1,5 @@
 /* See tracer.h. Creation: scene upload, grid, program and kernels. */
+#include "clock.h"
 #include "tracer_internal.h"
 #include "app_error.h"
 
@@ -301,13 +302,6 @@ void rt_tracer_destroy(rt_tracer *t)
     free(t);
 }
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 sluice_status rt_tracer_trace_stream(rt_tracer *t, sluice_stream *rays, size_t n,
                                      sluice_stream *hits)
 {
@@ -320,14 +314,14 @@ sluice_status rt_tracer_trace_stream(rt_tracer *t, sluice_stream *rays, size_t n
         sluice_stream_capacity(hits) < sluice_stream_capacity(rays) ||
         n > sluice_stream_capacity(rays) || n > UINT32_MAX / 2)
         return SLUICE_ERROR_INVALID_ARGUMENT;
-    double t0 = now();
+    double t0 = sr_clock_seconds();
     sluice_status st = t->opt.exec == RT_EXEC_FUSED ? rt_fused_trace(t, rays, n, hits)
                                                     : rt_stream_trace(t, rays, n, hits);
     if (st == SLUICE_OK) {
         t->stats.rays += n;
         t->stats.calls++;
     }
-    t->stats.seconds += now() - t0;
+    t->stats.seconds += sr_clock_seconds() - t0;
     return st;
 }
 

@@ -1,0 +1,167 @@
+/* See cli.h. */
+#include "cli.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+void sr_cli_common_init(sr_cli_common *c)
+{
+    memset(c, 0, sizeof *c);
+    c->scene = "cornell";
+    c->out = "out.png";
+    c->seed = 1;
+    c->profile = 1;
+}
+
+int sr_cli_bad(const char *prog, const char *opt, const char *value, const char *why)
+{
+    fprintf(stderr, "%s: %s%s%s: %s (see --help)\n", prog, opt, value ? " " : "",
+            value ? value : "", why);
+    return 2;
+}
+
+int sr_cli_uint(const char *s, unsigned lo, unsigned hi, unsigned *out)
+{
+    if (!s || !*s || *s == '-' || *s == '+')
+        return 0;
+    char *end;
+    errno = 0;
+    unsigned long v = strtoul(s, &end, 10);
+    if (errno || *end || v < lo || v > hi)
+        return 0;
+    *out = (unsigned)v;
+    return 1;
+}
+
+int sr_cli_double(const char *s, double lo, double hi, double *out)
+{
+    if (!s || !*s)
+        return 0;
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (errno || *end || !isfinite(v) || !(v >= lo && v <= hi))
+        return 0;
+    *out = v;
+    return 1;
+}
+
+int sr_cli_size(const char *s, unsigned *w, unsigned *h, const char **why)
+{
+    unsigned a, b;
+    char x;
+    int n = 0;
+    if (!s || s[0] == '-' || sscanf(s, "%u%c%u%n", &a, &x, &b, &n) != 3 || (size_t)n != strlen(s) ||
+        (x != 'x' && x != 'X')) {
+        *why = "expected WxH, e.g. 512x512";
+        return 0;
+    }
+    if (a == 0 || b == 0 || a > 16384 || b > 16384 || (unsigned long long)a * b > (1u << 26)) {
+        *why = "size out of range (1 .. 16384 per side, at most 2^26 pixels)";
+        return 0;
+    }
+    *w = a;
+    *h = b;
+    return 1;
+}
+
+int sr_cli_choice(const char *s, const char *const *names)
+{
+    for (int k = 0; s && names[k]; ++k)
+        if (!strcmp(s, names[k]))
+            return k;
+    return -1;
+}
+
+int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_common *c)
+{
+    const char *a = argv[*i];
+    static const struct {
+        const char *name;
+        size_t field;
+    } flags[] = {{"--progress", offsetof(sr_cli_common, progress)},
+                 {"--quiet", offsetof(sr_cli_common, quiet)}};
+    for (size_t k = 0; k < sizeof flags / sizeof *flags; ++k)
+        if (!strcmp(a, flags[k].name)) {
+            *(int *)((char *)c + flags[k].field) = 1;
+            return 1;
+        }
+    if (!strcmp(a, "--no-profile")) {
+        c->profile = 0;
+        return 1;
+    }
+    static const char *const valued[] = {"--scene", "--out",        "--stats", "--device", "--size",
+                                         "--seed",  "--checkpoint", "--time",  NULL};
+    int which = sr_cli_choice(a, valued);
+    if (which < 0)
+        return 0;
+    if (*i + 1 >= argc)
+        return sr_cli_bad(prog, a, NULL, "needs a value");
+    const char *v = argv[++*i];
+    const char *why = NULL;
+    switch (which) {
+    case 0:
+        c->scene = v;
+        break;
+    case 1:
+        c->out = v;
+        break;
+    case 2:
+        c->stats = v;
+        break;
+    case 3:
+        c->device = v;
+        break;
+    case 4:
+        if (!sr_cli_size(v, &c->width, &c->height, &why))
+            return sr_cli_bad(prog, a, v, why);
+        break;
+    case 5:
+        if (!sr_cli_uint(v, 0, UINT_MAX, &c->seed))
+            return sr_cli_bad(prog, a, v, "expected a whole number from 0 to 4294967295");
+        break;
+    case 6:
+        if (!sr_cli_uint(v, 1, 1u << 20, &c->checkpoint))
+            return sr_cli_bad(prog, a, v, "expected a whole number from 1 to 1048576");
+        break;
+    default:
+        if (!sr_cli_double(v, 1e-3, 1e7, &c->time_limit))
+            return sr_cli_bad(prog, a, v, "expected seconds, from 0.001 to 10000000");
+        break;
+    }
+    return 1;
+}
+
+int sr_cli_common_finish(const char *prog, const sr_cli_common *c)
+{
+    const char *dot = strrchr(c->out, '.');
+    if (!dot || (strcasecmp(dot, ".png") != 0 && strcasecmp(dot, ".exr") != 0 &&
+                 strcasecmp(dot, ".hdr") != 0))
+        return sr_cli_bad(prog, "--out", c->out, "the file name must end in .png, .exr or .hdr");
+    return 0;
+}
+
+void sr_cli_common_usage(FILE *out)
+{
+    fputs("  --scene NAME|FILE        built-in scene or scene/mesh file (default cornell)\n"
+          "  --size WxH               image size (default: the scene camera's)\n"
+          "  --seed N                 random seed (default 1); same seed, same image\n"
+          "  --out FILE               image: .png (sRGB, 8-bit), .exr or .hdr (linear float)\n"
+          "                           (default out.png)\n"
+          "  --stats FILE             write the statistics as JSON\n"
+          "  --progress               progress bar with ETA on stderr\n"
+          "  --checkpoint N           write the image every N samples or passes\n"
+          "  --time SECONDS           stop after this much rendering time (the image so far\n"
+          "                           is written; at least one sample or pass runs)\n"
+          "  --device NAME            OpenCL device (substring of \"platform / device\")\n"
+          "  --no-profile             do not time kernels\n"
+          "  --quiet                  no statistics table\n"
+          "  --help                   this text\n",
+          out);
+}

@@ -1,0 +1,62 @@
+/*
+ * Command-line parsing shared by the renderers: the options every renderer
+ * takes (scene, size, output, statistics, seed, progress, checkpoints, time
+ * budget, device, profiling) parsed one way, and the helpers each renderer
+ * uses for its own options, so that every bad value gets the same kind of
+ * message: "PROG: --opt VALUE: why (see --help)" and exit status 2.
+ */
+#ifndef SR_CLI_H
+#define SR_CLI_H
+
+#include <stdio.h>
+
+/** The options common to the renderers. */
+typedef struct sr_cli_common {
+    const char *scene;      /**< --scene (default "cornell") */
+    const char *out;        /**< --out (default "out.png"): .png, .exr or .hdr */
+    const char *stats;      /**< --stats FILE (JSON), or NULL */
+    const char *device;     /**< --device substring, or NULL */
+    unsigned width, height; /**< --size; 0: the scene camera's */
+    unsigned seed;          /**< --seed (default 1) */
+    unsigned checkpoint;    /**< --checkpoint N; 0: none */
+    double time_limit;      /**< --time SECONDS; 0: none */
+    int progress;           /**< --progress */
+    int profile;            /**< 1 unless --no-profile */
+    int quiet;              /**< --quiet */
+} sr_cli_common;
+
+/** Fills the defaults. */
+void sr_cli_common_init(sr_cli_common *c);
+
+/**
+ * Parses argv[*i] if it is a common option, taking its value from
+ * argv[*i + 1] (and advancing *i past it). Returns 1 when it was one, 0 when
+ * it is not a common option (the caller tries its own), 2 after printing a
+ * message for a bad or missing value.
+ */
+int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_common *c);
+
+/** Checks what can only be checked once all options are read (the output's
+ *  extension). 0 when fine, 2 after printing a message. */
+int sr_cli_common_finish(const char *prog, const sr_cli_common *c);
+
+/** Prints the common options' lines of --help. */
+void sr_cli_common_usage(FILE *out);
+
+/** Prints "PROG: OPT VALUE: WHY (see --help)" to stderr and returns 2. */
+int sr_cli_bad(const char *prog, const char *opt, const char *value, const char *why);
+
+/** Parses a whole decimal number in [lo, hi]; 1 on success. */
+int sr_cli_uint(const char *s, unsigned lo, unsigned hi, unsigned *out);
+
+/** Parses a finite number in [lo, hi]; 1 on success. */
+int sr_cli_double(const char *s, double lo, double hi, double *out);
+
+/** Parses "WxH" (1 .. 16384 per side, at most 2^26 pixels); 1 on success,
+ *  0 with `*why` set otherwise. */
+int sr_cli_size(const char *s, unsigned *w, unsigned *h, const char **why);
+
+/** Parses a value among `names` (NULL-terminated); the index, or -1. */
+int sr_cli_choice(const char *s, const char *const *names);
+
+#endif /* SR_CLI_H */
