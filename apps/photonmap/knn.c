@@ -1,0 +1,423 @@
+/* The kNN-grid search (knn.h; Purcell 6.2.3), kernels in
+ * kernels/photonmap/pm_knn.cl. Per batch of queries:
+ *
+ *   pm_knn_init    results zeroed, live = the batch's ids
+ *   loop           while the live stream is not empty (sluice_loop watching
+ *                  its length: Purcell's occlusion query, 6.3.3):
+ *                    pm_knn_pass  one more shell per live query
+ *                    pm_knn_live  the ids not done into `next`; swap
+ *
+ * The per-query state between passes is the result record itself (sums,
+ * count, r^2, shells, flags) and, in exact mode, the heap. Atleast mode runs
+ * all queries in one batch; exact mode in batches whose heaps fit
+ * PM_KNN_EXACT_HEAP_BYTES. */
+#include "knn.h"
+
+#include "kernels.h"
+
+#include "../../kernels/render/pg_types.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+/* Arguments of pm_knn_pass after SLUICE_PARAMS. */
+enum {
+    PASS_LIVE,
+    PASS_QUERIES,
+    PASS_PHOTONS,
+    PASS_ORDER,
+    PASS_START,
+    PASS_COUNT,
+    PASS_ARRIVED,
+    PASS_GRID,
+    PASS_PARAMS,
+    PASS_EXACT,
+    PASS_BASE,
+    PASS_RESULTS,
+    PASS_HEAP_D2,
+    PASS_HEAP_ID,
+    PASS_INDICES
+};
+
+struct pm_knn {
+    sluice_context *ctx;
+    sluice_program *prog;
+    sluice_kernel *k_init, *k_pass, *k_live;
+    sluice_loop *loop;
+    /* scratch kept between calls; streams only grow */
+    sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
+    char message[512];
+};
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static sluice_status fail(pm_knn *knn, sluice_status st, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static sluice_status fail(pm_knn *knn, sluice_status st, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(knn->message, sizeof knn->message, fmt, ap);
+    va_end(ap);
+    return st;
+}
+
+/* One pass of the loop. */
+static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
+{
+    (void)pass;
+    (void)choice;
+    pm_knn *knn = user;
+    sluice_status st = sluice_stream_clear(knn->next);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch(knn->k_pass);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch(knn->k_live);
+    if (st == SLUICE_OK)
+        st = sluice_stream_swap(knn->live, knn->next);
+    return st;
+}
+
+/* Goes on while queries are live. */
+static unsigned knn_oracle(void *user, unsigned pass, const uint32_t *values, size_t count)
+{
+    (void)user;
+    (void)pass;
+    (void)count;
+    return values[0] ? 0u : SLUICE_LOOP_STOP;
+}
+
+void pm_knn_destroy(pm_knn *knn)
+{
+    if (!knn)
+        return;
+    sluice_loop_destroy(knn->loop);
+    sluice_kernel_destroy(knn->k_init);
+    sluice_kernel_destroy(knn->k_pass);
+    sluice_kernel_destroy(knn->k_live);
+    sluice_program_destroy(knn->prog);
+    sluice_stream_destroy(knn->live);
+    sluice_stream_destroy(knn->next);
+    sluice_stream_destroy(knn->heap_d2);
+    sluice_stream_destroy(knn->heap_id);
+    sluice_stream_destroy(knn->dummy);
+    free(knn);
+}
+
+sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out)
+{
+    if (!out)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!ctx)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    pm_knn *knn = calloc(1, sizeof *knn);
+    if (!knn)
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    knn->ctx = ctx;
+    sluice_status st = sr_program_create(
+        ctx, (const char *[]){"rt_types.h", "pg_types.h", "pm_types.h", "pm_knn.cl"}, 4, NULL,
+        &knn->prog);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_init", &knn->k_init);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_pass", &knn->k_pass);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_live", &knn->k_live);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, 4, 1, &knn->live);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, 4, 1, &knn->next);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, 4, 1, &knn->dummy);
+    if (st == SLUICE_OK) {
+        sluice_loop_desc d = {0};
+        d.pass = knn_pass;
+        d.oracle = knn_oracle;
+        d.user = knn;
+        d.streams = &knn->live;
+        d.stream_count = 1;
+        /* each pass adds a shell: a grid has fewer than 2^21 cells a side */
+        d.max_passes = 1u << 21;
+        st = sluice_loop_create(ctx, &d, &knn->loop);
+    }
+    if (st != SLUICE_OK) {
+        pm_knn_destroy(knn);
+        return st;
+    }
+    *out = knn;
+    return SLUICE_OK;
+}
+
+const char *pm_knn_error(const pm_knn *knn)
+{
+    return knn ? knn->message : "NULL kNN search";
+}
+
+/* Makes *s a stream of records of `size` with at least `cap` records. */
+static sluice_status ensure(sluice_context *ctx, sluice_stream **s, size_t size, size_t cap)
+{
+    if (cap == 0)
+        cap = 1;
+    if (*s && sluice_stream_capacity(*s) >= cap)
+        return SLUICE_OK;
+    sluice_stream_destroy(*s);
+    *s = NULL;
+    return sluice_stream_create(ctx, size, cap, s);
+}
+
+/* Checks a stream argument: record size and at least `n` records. */
+static sluice_status check_stream(pm_knn *knn, sluice_stream *s, const char *what, size_t size,
+                                  size_t n, int need_length)
+{
+    if (!s)
+        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL %s stream", what);
+    if (sluice_stream_record_size(s) != size)
+        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT,
+                    "kNN: %s records are %zu bytes, %zu expected", what,
+                    sluice_stream_record_size(s), size);
+    size_t have = sluice_stream_capacity(s);
+    if (need_length) {
+        sluice_status st = sluice_stream_length(s, &have);
+        if (st != SLUICE_OK)
+            return fail(knn, st, "kNN: %s", sluice_context_error(knn->ctx));
+    }
+    if (have < n)
+        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: %s holds %zu records, %zu needed",
+                    what, have, n);
+    return SLUICE_OK;
+}
+
+/* Fills the kernels' description of the search. The margin bounds how far
+ * the float cell function can misplace a point across a cell face: a few
+ * ulps of (x - lo) / cell, which is at most dims, in cell units, plus the
+ * rounding of the coordinates themselves. */
+static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, uint32_t cap,
+                        pg_params *g, pm_knn_params *p)
+{
+    memset(g, 0, sizeof *g);
+    memset(p, 0, sizeof *p);
+    for (int a = 0; a < 3; ++a) {
+        g->lo[a] = v->desc.lo[a];
+        g->cell[a] = v->desc.cell[a];
+        g->inv_cell[a] = 1.0f / v->desc.cell[a];
+        g->dims[a] = v->desc.dims[a];
+        double mag = fmax(fabs((double)v->desc.lo[a]), fabs((double)v->desc.hi[a]));
+        p->margin[a] =
+            (float)((double)v->desc.cell[a] * ((double)v->desc.dims[a] * 0x1p-20 + 0x1p-12) +
+                    mag * 0x1p-20);
+    }
+    g->cells = v->cells;
+    g->stride = sizeof(pm_photon) / 4;
+    g->slots = v->slots;
+    p->k = o->k;
+    p->max_r2 = o->max_radius * o->max_radius;
+    p->normal_filter = o->normal_filter ? 1u : 0u;
+    p->index_cap = cap;
+}
+
+static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,
+                           sluice_stream *queries, size_t n, sluice_stream *results,
+                           const pm_knn_options *o, sluice_stream *indices, uint32_t cap,
+                           pm_knn_stats *stats)
+{
+    double t0 = now();
+    knn->message[0] = '\0';
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (!grid || !o)
+        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL argument");
+    if (o->k == 0 || o->k > PM_KNN_MAX_K)
+        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: k = %u (1 .. %u allowed)", o->k,
+                    PM_KNN_MAX_K);
+    if (!(o->max_radius > 0.0f)) /* also NaN; INFINITY is fine */
+        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: the maximum radius must be > 0");
+    if (o->mode != PM_KNN_ATLEAST && o->mode != PM_KNN_EXACT)
+        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: unknown mode %d", (int)o->mode);
+    if (n > UINT32_MAX / 2)
+        return fail(knn, SLUICE_ERROR_LIMIT, "kNN: %zu queries exceed the limit of %u", n,
+                    UINT32_MAX / 2);
+    sr_point_grid_view v;
+    sluice_status st = sr_point_grid_get(grid, &v);
+    if (st != SLUICE_OK || !v.order || !v.cells)
+        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: the point grid is not built");
+    st = check_stream(knn, photons, "photon", sizeof(pm_photon), v.points, 1);
+    if (st == SLUICE_OK)
+        st = check_stream(knn, queries, "query", sizeof(pm_query), n, 1);
+    if (st == SLUICE_OK)
+        st = check_stream(knn, results, "result", sizeof(pm_knn_result), n, 0);
+    if (st == SLUICE_OK && indices) {
+        if (cap == 0 || (uint64_t)n * cap > UINT32_MAX)
+            return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT,
+                        "kNN: an index list of %u places per query for %zu queries", cap, n);
+        st = check_stream(knn, indices, "index", 4, n * cap, 0);
+    }
+    if (st != SLUICE_OK)
+        return st;
+
+    pg_params g;
+    pm_knn_params p;
+    params_make(&v, o, indices ? cap : 0u, &g, &p);
+    uint32_t exact = o->mode == PM_KNN_EXACT;
+    size_t batch = n ? n : 1;
+    if (exact) {
+        size_t per = (size_t)o->k * 8;
+        size_t fit = PM_KNN_EXACT_HEAP_BYTES / per;
+        if (fit < 1)
+            fit = 1;
+        if (batch > fit)
+            batch = fit;
+    }
+    const char *step = "allocating scratch";
+    st = ensure(knn->ctx, &knn->live, 4, batch);
+    if (st == SLUICE_OK)
+        st = ensure(knn->ctx, &knn->next, 4, batch);
+    if (st == SLUICE_OK && exact)
+        st = ensure(knn->ctx, &knn->heap_d2, 4, batch * o->k);
+    if (st == SLUICE_OK && exact)
+        st = ensure(knn->ctx, &knn->heap_id, 4, batch * o->k);
+    if (st != SLUICE_OK)
+        goto runtime_fail;
+
+    step = "binding the kernels";
+    sluice_kernel *k = knn->k_pass;
+    st = sluice_kernel_set_input(k, PASS_LIVE, knn->live);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_QUERIES, queries, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_PHOTONS, photons, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_ORDER, v.order, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_START, v.cell_start, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_COUNT, v.cell_count, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_ARRIVED, v.cell_arrived, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, PASS_GRID, sizeof g, &g);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, PASS_PARAMS, sizeof p, &p);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, PASS_EXACT, sizeof exact, &exact);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_RESULTS, results, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_HEAP_D2, exact ? knn->heap_d2 : knn->dummy, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_HEAP_ID, exact ? knn->heap_id : knn->dummy, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_INDICES, indices ? indices : knn->dummy, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_input(knn->k_live, 0, knn->live);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_live, 1, results, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(knn->k_live, 2, 0, knn->next, SLUICE_UNORDERED);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_init, 0, results, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_init, 1, knn->live, 0);
+    if (st != SLUICE_OK)
+        goto runtime_fail;
+
+    for (size_t base = 0; base < n; base += batch) {
+        size_t bn = n - base < batch ? n - base : batch;
+        uint32_t b32 = (uint32_t)base;
+        step = "starting a batch";
+        st = sluice_kernel_set_arg(knn->k_init, 2, sizeof b32, &b32);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_launch_count(knn->k_init, bn);
+        if (st == SLUICE_OK)
+            st = sluice_stream_set_length(knn->live, bn);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_arg(k, PASS_BASE, sizeof b32, &b32);
+        if (st != SLUICE_OK)
+            goto runtime_fail;
+        step = "searching";
+        st = sluice_loop_run(knn->loop);
+        if (st != SLUICE_OK)
+            goto runtime_fail;
+        if (stats) {
+            unsigned passes = sluice_loop_pass_count(knn->loop);
+            for (unsigned i = 0; i < passes && i < PM_KNN_STATS_PASSES; ++i)
+                stats->live[i] += sluice_loop_pass(knn->loop, i)->values[0];
+            stats->passes += passes;
+            stats->batches++;
+        }
+    }
+    st = sluice_stream_set_length(results, n);
+    if (st == SLUICE_OK && indices)
+        st = sluice_stream_set_length(indices, n * cap);
+    if (st == SLUICE_OK)
+        st = sluice_context_finish(knn->ctx);
+    if (st != SLUICE_OK)
+        goto runtime_fail;
+    if (stats && n) {
+        pm_knn_result *r = malloc(n * sizeof *r);
+        if (!r)
+            return fail(knn, SLUICE_ERROR_OUT_OF_MEMORY, "kNN: statistics: out of host memory");
+        st = sluice_stream_download(results, r, n, NULL);
+        double sum_count = 0.0, sum_radius = 0.0;
+        size_t with = 0;
+        for (size_t i = 0; st == SLUICE_OK && i < n; ++i) {
+            sum_count += r[i].count;
+            if (r[i].count) {
+                sum_radius += sqrt((double)r[i].r2);
+                ++with;
+            } else {
+                stats->empty++;
+            }
+            if (r[i].flags & PM_KNN_HIT_MAX_RADIUS)
+                stats->hit_max_radius++;
+        }
+        free(r);
+        if (st != SLUICE_OK)
+            goto runtime_fail;
+        stats->queries = n;
+        stats->mean_count = sum_count / (double)n;
+        stats->mean_radius = with ? sum_radius / (double)with : 0.0;
+    }
+    if (stats)
+        stats->seconds = now() - t0;
+    return SLUICE_OK;
+
+runtime_fail:
+    if (st == SLUICE_ERROR_OUT_OF_MEMORY && !*sluice_context_error(knn->ctx))
+        return fail(knn, st, "kNN: %s: out of memory", step);
+    return fail(knn, st, "kNN: %s: %s", step, sluice_context_error(knn->ctx));
+}
+
+sluice_status pm_knn_query(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,
+                           sluice_stream *queries, size_t n, sluice_stream *results,
+                           const pm_knn_options *options, pm_knn_stats *stats)
+{
+    if (!knn)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    return query(knn, grid, photons, queries, n, results, options, NULL, 0, stats);
+}
+
+sluice_status pm_knn_query_indices(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,
+                                   sluice_stream *queries, size_t n, sluice_stream *results,
+                                   const pm_knn_options *options, sluice_stream *indices,
+                                   uint32_t cap, pm_knn_stats *stats)
+{
+    if (!knn)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (!indices)
+        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL index stream");
+    return query(knn, grid, photons, queries, n, results, options, indices, cap, stats);
+}

@@ -1,0 +1,126 @@
+/*
+ * The kNN-grid radiance estimate (Purcell, thesis 6.2.3, Fig. 6.6): a
+ * variant of Elias's search (Cleary 1979) over the uniform point grid
+ * (apps/render/point_grid.h). Cells are explored in concentric shells
+ * around the query's cell, one shell per pass; a query that is done leaves
+ * the stream of live queries, so a pass costs only the queries still
+ * searching (Purcell 6.3.3 and 6.4.3: his tiles and occlusion queries; here
+ * a sluice_loop watching the live stream's length).
+ *
+ * Modes:
+ *   PM_KNN_ATLEAST  Purcell's rule. A photon beyond the maximum radius is
+ *                   rejected; while fewer than k are in the estimate every
+ *                   photon examined is added and the radius grows to take it
+ *                   in; once k are in, the radius is frozen and only photons
+ *                   inside it are added. Done when (count >= k and the
+ *                   explored cube's inscribed radius d_s >= the radius), or
+ *                   d_s >= the maximum radius, or the shells cover the grid.
+ *                   The estimate is then exactly the photons within its
+ *                   radius: at least min(k, photons within the maximum
+ *                   radius) of them.
+ *   PM_KNN_EXACT    Jensen's k nearest: a max-heap of k (distance, photon)
+ *                   per query; done when the heap is full and d_s >= its
+ *                   largest distance, or d_s >= the maximum radius, or the
+ *                   shells cover the grid. The radius is the k-th distance.
+ *                   The heaps take 8 k bytes per query; queries run in
+ *                   batches of at most PM_KNN_EXACT_HEAP_BYTES of heaps.
+ *
+ * Photons are pm_photon records (kernels/photonmap/pm_types.h); the grid
+ * must have been built over that stream (stride 40). Each photon's power is
+ * scaled by its cell's arrived / stored count, Purcell's power
+ * redistribution for the stencil build (exactly 1 for the other builds).
+ * d_s is shrunk by a small margin (see pm_knn_params.margin) so that float
+ * rounding in the cell function can only cost an extra shell, never a
+ * photon.
+ */
+#ifndef SLUICE_PM_KNN_H
+#define SLUICE_PM_KNN_H
+
+#include "point_grid.h"
+#include "sluice/sluice.h"
+
+#include "../../kernels/render/rt_types.h"
+#include "../../kernels/photonmap/pm_types.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+/** The search's rule. */
+typedef enum pm_knn_mode {
+    PM_KNN_ATLEAST = 0, /**< Purcell's kNN-grid: all photons within the final radius */
+    PM_KNN_EXACT = 1    /**< Jensen's k nearest (max-heap) */
+} pm_knn_mode;
+
+/** Most photons sought per query. */
+#define PM_KNN_MAX_K (1u << 20)
+
+/** Most bytes of heaps the exact mode holds at once (64 MiB): queries run in
+ *  batches of 64 MiB / (8 k). */
+#define PM_KNN_EXACT_HEAP_BYTES ((size_t)64 << 20)
+
+/** Passes recorded per call in pm_knn_stats.live (the first ones). */
+#define PM_KNN_STATS_PASSES 64
+
+/** What to search for. */
+typedef struct pm_knn_options {
+    uint32_t k;        /**< photons sought (1 .. PM_KNN_MAX_K) */
+    float max_radius;  /**< photons farther than this are never used (> 0, may be INFINITY) */
+    pm_knn_mode mode;  /**< PM_KNN_ATLEAST or PM_KNN_EXACT */
+    int normal_filter; /**< non-zero: only photons arriving on the side the
+                            query's normal faces (dot(n, d) < 0) */
+} pm_knn_options;
+
+/** Statistics of the last query call. */
+typedef struct pm_knn_stats {
+    size_t queries;                     /**< queries answered */
+    unsigned passes;                    /**< passes over all batches */
+    unsigned batches;                   /**< batches (1 unless exact mode splits) */
+    uint32_t live[PM_KNN_STATS_PASSES]; /**< live queries after pass i (summed over batches) */
+    double mean_count;                  /**< photons per estimate */
+    double mean_radius;                 /**< sqrt(r2) per estimate with photons */
+    size_t hit_max_radius;              /**< queries flagged PM_KNN_HIT_MAX_RADIUS */
+    size_t empty;                       /**< queries that found no photon */
+    double seconds;                     /**< host wall time of the call, waited for */
+} pm_knn_stats;
+
+typedef struct pm_knn pm_knn;
+
+/** Creates the search on `ctx`: its program, kernels and loop, kept for
+ *  every call. */
+sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out);
+
+/** Frees the search and its scratch (NULL is fine). */
+void pm_knn_destroy(pm_knn *knn);
+
+/**
+ * Answers the first `n` queries of `queries` (pm_query records) against
+ * the photons of `photons` (pm_photon records, the stream `grid` was last
+ * built over) into results[0 .. n) (pm_knn_result records; capacity >= n;
+ * length set to n). Waits for the answer. `stats` may be NULL (otherwise the
+ * results are read back to fill it). Errors: SLUICE_ERROR_INVALID_ARGUMENT
+ * for NULL arguments, wrong record sizes, n above a stream's length or the
+ * results' capacity, a grid not built or built over fewer photons than it
+ * lists, bad options; the runtime's errors otherwise. pm_knn_error says
+ * why.
+ */
+sluice_status pm_knn_query(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,
+                           sluice_stream *queries, size_t n, sluice_stream *results,
+                           const pm_knn_options *options, pm_knn_stats *stats);
+
+/**
+ * pm_knn_query that also lists, per query, the photon indices of its
+ * estimate (a debug path for tests against other kNN libraries): query q's
+ * are indices[q * cap .. q * cap + min(count, cap)) (uint32 records,
+ * capacity >= n * cap; length set to n * cap), in the order they were added
+ * (atleast) or heap order (exact). A query with more than `cap` gets
+ * PM_KNN_INDICES_CUT. cap >= 1.
+ */
+sluice_status pm_knn_query_indices(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,
+                                   sluice_stream *queries, size_t n, sluice_stream *results,
+                                   const pm_knn_options *options, sluice_stream *indices,
+                                   uint32_t cap, pm_knn_stats *stats);
+
+/** Why the last call failed ("" after a success). */
+const char *pm_knn_error(const pm_knn *knn);
+
+#endif /* SLUICE_PM_KNN_H */

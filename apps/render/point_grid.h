@@ -1,0 +1,163 @@
+/*
+ * A uniform grid over points (photons), built on the device (Purcell, thesis
+ * 6.2.2). Same layout conventions as the triangle grid (grid.h): the box
+ * rt_grid_desc.lo .. hi cut into dims[0] x dims[1] x dims[2] cells, cell
+ * c = x + nx * (y + ny * z); a point outside the box belongs to the nearest
+ * boundary cell (its coordinates are clamped), and a point with a
+ * non-finite coordinate is dropped (counted in the statistics).
+ *
+ * Result, the same for every build:
+ *   order         point indices, each cell's in ascending index order
+ *   cell_start    cells records: cell c's points are
+ *                 order[cell_start[c] .. cell_start[c] + cell_count[c])
+ *   cell_count    cells records: points stored in the cell
+ *   cell_arrived  cells records: points that fell into the cell; more than
+ *                 cell_count only where the stencil build dropped some
+ *                 (the photon mapper scales stored power by
+ *                 arrived / stored: Purcell's power redistribution)
+ *
+ * Builds (sr_point_grid_build):
+ *   BITONIC  Purcell Fig. 6.4: (cell, index) pairs sorted with
+ *            sluice_sort_bitonic, cell starts by sluice_cell_index_search.
+ *   STENCIL  Purcell's stencil routing: at most `slots` points per cell,
+ *            routed by sluice_route_bounded into fixed footprints
+ *            (cell_start[c] = c * slots). Deterministic: an overfull cell
+ *            keeps its `slots` lowest point indices, which is what Purcell's
+ *            stencil keeps when photons are drawn in index order.
+ *   COUNT    counting sort: histogram (sluice_cell_index_count), scan,
+ *            scatter. The fast default.
+ * The object keeps its kernels and scratch streams between builds (a
+ * progressive photon map is rebuilt every pass); streams only grow.
+ */
+#ifndef SLUICE_SR_POINT_GRID_H
+#define SLUICE_SR_POINT_GRID_H
+
+#include "grid.h"
+#include "sluice/sluice.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+/** How sr_point_grid_build bins the points. */
+typedef enum sr_point_grid_build_kind {
+    SR_POINT_GRID_COUNT = 0,   /**< counting sort (default) */
+    SR_POINT_GRID_BITONIC = 1, /**< bitonic sort + binary search (Purcell Fig. 6.4) */
+    SR_POINT_GRID_STENCIL = 2  /**< bounded routing into m*m places per cell */
+} sr_point_grid_build_kind;
+
+/** Most points one build takes (keys and indices stay below 2^32 - 1). */
+#define SR_POINT_GRID_MAX_POINTS ((size_t)1 << 30)
+
+/** Most cells x slots of the stencil build's footprints (1 GiB of order). */
+#define SR_POINT_GRID_MAX_FOOTPRINT ((size_t)1 << 28)
+
+/** Most places per cell of the stencil build (Purcell uses m = 16: 256). */
+#define SR_POINT_GRID_MAX_SLOTS 65536u
+
+/** Cell edge over search radius that sr_point_grid_desc_auto aims at.
+ *  Measured with bench_knn (65,000 photons on the Cornell-box walls, count
+ *  build, atleast mode, k = 32 .. 500, 2 cores): an edge of 1x the radius
+ *  was within a few percent of the best of 0.5x, 0.75x, 1x, 1.5x and 2x for
+ *  every k, and finer grids cost more empty cells per shell. */
+#define SR_POINT_GRID_AUTO_EDGE 1.0
+
+/** Most cells sr_point_grid_desc_auto makes: 2^22, and at most
+ *  SR_POINT_GRID_AUTO_CELLS_PER_POINT per point (at least 64): past that,
+ *  empty cells cost more to walk than the photons they separate. */
+#define SR_POINT_GRID_AUTO_MAX_CELLS (1u << 22)
+#define SR_POINT_GRID_AUTO_CELLS_PER_POINT 4u
+
+/** Statistics of the last build. */
+typedef struct sr_point_grid_stats {
+    size_t points;            /**< points given */
+    size_t cells;             /**< cells of the grid */
+    size_t stored;            /**< points stored in the grid (listed in order) */
+    size_t dropped_nonfinite; /**< points with a non-finite coordinate (dropped) */
+    size_t occupied_cells;    /**< cells with at least one stored point */
+    uint32_t max_per_cell;    /**< most points that arrived in one cell */
+    double mean_per_occupied; /**< arrived points / occupied cells */
+    size_t overflow_points;   /**< stencil: points that arrived but were not stored */
+    size_t overfull_cells;    /**< stencil: cells with more points than slots */
+    double build_seconds;     /**< host wall time of the build, waited for */
+} sr_point_grid_stats;
+
+/** What the grid holds after a build (the streams stay the grid's: do not
+ *  destroy them; they change at the next build). */
+typedef struct sr_point_grid_view {
+    rt_grid_desc desc;
+    uint32_t cells; /**< dims[0] * dims[1] * dims[2] */
+    sr_point_grid_build_kind kind;
+    uint32_t slots;              /**< stencil: places per cell; 0 otherwise */
+    size_t points;               /**< points the grid was built over (indices below this) */
+    sluice_stream *order;        /**< uint32 point indices */
+    sluice_stream *cell_start;   /**< uint32, cells records */
+    sluice_stream *cell_count;   /**< uint32, cells records */
+    sluice_stream *cell_arrived; /**< uint32, cells records */
+} sr_point_grid_view;
+
+typedef struct sr_point_grid sr_point_grid;
+
+/** Creates a point grid builder on `ctx`: compiles its program and creates
+ *  its kernels once. */
+sluice_status sr_point_grid_create(sluice_context *ctx, sr_point_grid **out);
+
+/** Frees the builder and its streams (NULL is fine). */
+void sr_point_grid_destroy(sr_point_grid *g);
+
+/**
+ * (Re)builds the grid described by `desc` (see rt_grid_desc_check for what a
+ * description must satisfy) over the first `n` records of `points`, whose
+ * records are `stride` bytes and start with 3 floats (x, y, z): a pm_photon
+ * stream can be passed as it is. `slots` is the stencil build's places per
+ * cell (1 .. SR_POINT_GRID_MAX_SLOTS; ignored by the others). Waits for the
+ * build (it reads back its counters). Errors: SLUICE_ERROR_INVALID_ARGUMENT
+ * for NULL arguments, a stride that is not a multiple of 4 or below 12 or
+ * not the stream's record size, n above the stream's length, a bad
+ * description, an unknown kind or bad slots; SLUICE_ERROR_LIMIT for n above
+ * SR_POINT_GRID_MAX_POINTS or a stencil footprint above
+ * SR_POINT_GRID_MAX_FOOTPRINT; the runtime's errors otherwise. On failure
+ * the previous grid is gone (the view is empty) and sr_point_grid_error
+ * says why.
+ */
+sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sluice_stream *points,
+                                  size_t stride, size_t n, sr_point_grid_build_kind kind,
+                                  uint32_t slots);
+
+/** The grid of the last successful build (all zero before one). */
+sluice_status sr_point_grid_get(const sr_point_grid *g, sr_point_grid_view *view);
+
+/** Statistics of the last build (occupancy and the largest cell are read
+ *  back at the build). */
+sluice_status sr_point_grid_statistics(const sr_point_grid *g, sr_point_grid_stats *stats);
+
+/** Why the last call failed ("" after a success). */
+const char *sr_point_grid_error(const sr_point_grid *g);
+
+/** The cell of a point by the same arithmetic as the device builds
+ *  (kernels/render/pg_types.h): the C reference of the tests. Returns the
+ *  cell count for a point with a non-finite coordinate. `desc` is trusted
+ *  (rt_grid_desc_check). */
+uint32_t sr_point_grid_cell_of(const rt_grid_desc *desc, const float p[3]);
+
+/**
+ * A grid over the points' bounds [lo, hi] for searches of radius `radius`
+ * (> 0): cubic cells of edge SR_POINT_GRID_AUTO_EDGE * radius, made coarser
+ * where the grid would have more than SR_POINT_GRID_AUTO_MAX_CELLS cells or
+ * more than SR_POINT_GRID_AUTO_CELLS_PER_POINT per point (at least 64). The
+ * box is padded as rt_grid_choose pads it (a flat axis gets one cell) and
+ * stretched about its centre to whole cells. Errors: non-finite bounds or
+ * radius, radius <= 0, lo > hi: SLUICE_ERROR_INVALID_ARGUMENT.
+ */
+sluice_status sr_point_grid_desc_auto(const float lo[3], const float hi[3], size_t points,
+                                      float radius, rt_grid_desc *out, char *err, size_t err_size);
+
+/**
+ * A grid of exactly dims[0] x dims[1] x dims[2] cells over [lo, hi] (e.g.
+ * Purcell's 250x1x250 and 25x25x50): cell = (hi - lo) / dims. An axis of zero
+ * extent is padded to a positive one. Errors as rt_grid_desc_check, and
+ * non-finite bounds or lo > hi.
+ */
+sluice_status sr_point_grid_desc_dims(const float lo[3], const float hi[3], const uint32_t dims[3],
+                                      rt_grid_desc *out, char *err, size_t err_size);
+
+#endif /* SLUICE_SR_POINT_GRID_H */

@@ -1,0 +1,526 @@
+/* Tests of the kNN-grid search (apps/photonmap/knn.h; Purcell 6.2.3)
+ * against FLANN's exact searches (FLANN_INDEX_KDTREE_SINGLE with eps 0; the
+ * default randomized kd-trees are approximate), for every build of the point
+ * grid (the stencil with slots enough for the fullest cell), on random
+ * photons, all photons in one cell, many photons at one point (ties),
+ * photons on cell faces and corners, a planar map on 250x1x250, fewer
+ * photons than k, an empty map and queries outside the grid:
+ *
+ *   atleast  every photon FLANN finds within the final radius is in the
+ *            estimate, every photon of the estimate is within it, and there
+ *            are at least min(k, photons within the maximum radius). Float
+ *            rounding differs between FLANN and the kernel (summation
+ *            order), so "within" allows a relative band of 1e-5 of r^2 at
+ *            the boundary: photons inside the band may be in or out.
+ *   exact    the same multiset of squared distances as FLANN's k nearest
+ *            within the maximum radius (sorted, compared with a relative
+ *            tolerance of 1e-5: ties make the indices ambiguous).
+ *
+ * Also: the three builds give the same results bit for bit, the summed
+ * power matches the photons listed, the normal filter, exact mode in
+ * several batches, statistics and the error paths. */
+#include "check.h"
+#include "knn.h"
+
+#include <flann/flann.h>
+#include <math.h>
+#include <string.h>
+
+#define BAND 1e-5
+
+static float frand(uint32_t *s)
+{
+    return (float)(check_rand(s) >> 8) * (1.0f / 16777216.0f);
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+static float dist2(const pm_photon *p, const pm_query *q)
+{
+    float dx = p->px - q->px, dy = p->py - q->py, dz = p->pz - q->pz;
+    return dx * dx + dy * dy + dz * dz;
+}
+
+typedef struct fixture {
+    sluice_context *ctx;
+    sr_point_grid *grid;
+    pm_knn *knn;
+} fixture;
+
+typedef struct flann_ref {
+    flann_index_t index;
+    struct FLANNParameters params;
+    float *pos;
+    int *idx;
+    float *d;
+    size_t np;
+} flann_ref;
+
+static void flann_ref_init(flann_ref *f, const pm_photon *ph, size_t np)
+{
+    memset(f, 0, sizeof *f);
+    f->np = np;
+    f->params = DEFAULT_FLANN_PARAMETERS;
+    f->params.algorithm = FLANN_INDEX_KDTREE_SINGLE;
+    f->params.checks = FLANN_CHECKS_UNLIMITED;
+    f->params.eps = 0.0f;
+    f->params.sorted = 1;
+    f->params.max_neighbors = -1;
+    f->params.log_level = FLANN_LOG_NONE;
+    f->params.leaf_max_size = 10;
+    f->params.cores = 1;
+    f->pos = malloc((np * 3 + 3) * sizeof *f->pos);
+    f->idx = malloc((np + 1) * sizeof *f->idx);
+    f->d = malloc((np + 1) * sizeof *f->d);
+    for (size_t i = 0; i < np; ++i) {
+        f->pos[3 * i] = ph[i].px;
+        f->pos[3 * i + 1] = ph[i].py;
+        f->pos[3 * i + 2] = ph[i].pz;
+    }
+    if (np) {
+        float speedup;
+        f->index = flann_build_index_float(f->pos, (int)np, 3, &speedup, &f->params);
+        CHECK(f->index != NULL, "FLANN index");
+    }
+}
+
+static void flann_ref_free(flann_ref *f)
+{
+    if (f->index)
+        flann_free_index_float(f->index, &f->params);
+    free(f->pos);
+    free(f->idx);
+    free(f->d);
+}
+
+/* Photons FLANN finds within squared radius r2 of q (into f->idx, f->d). */
+static int flann_within(flann_ref *f, const pm_query *q, float r2)
+{
+    if (!f->np || !(r2 >= 0.0f))
+        return 0;
+    float qp[3] = {q->px, q->py, q->pz};
+    if (isinf(r2))
+        r2 = 3.0e38f;
+    return flann_radius_search_float(f->index, qp, f->idx, f->d, (int)f->np, r2, &f->params);
+}
+
+/* Checks the results of one query call of either mode against FLANN. */
+static void check_against_flann(const char *name, pm_knn_mode mode, flann_ref *f,
+                                const pm_photon *ph, const pm_query *qs, size_t nq,
+                                const pm_knn_result *res, const uint32_t *ind, uint32_t cap,
+                                uint32_t k, float max_r)
+{
+    const char *mname = mode == PM_KNN_EXACT ? "exact" : "atleast";
+    float max_r2 = max_r * max_r;
+    char *in = calloc(f->np + 1, 1);
+    float *mine = malloc(((size_t)cap + 1) * sizeof *mine);
+    size_t bad = 0, cut = 0;
+    for (size_t q = 0; q < nq && bad < 8; ++q) {
+        const pm_knn_result *r = &res[q];
+        if (r->flags & PM_KNN_INDICES_CUT) {
+            ++cut;
+            continue;
+        }
+        uint32_t m = r->count;
+        int ok = (r->flags & PM_KNN_DONE) != 0;
+        /* the list, its power and its radius */
+        double sr = 0.0;
+        float far = 0.0f;
+        for (uint32_t j = 0; j < m; ++j) {
+            uint32_t id = ind[q * cap + j];
+            if (id >= f->np) {
+                ok = 0;
+                break;
+            }
+            in[id] = 1;
+            sr += ph[id].pr;
+            mine[j] = dist2(&ph[id], &qs[q]);
+            far = fmaxf(far, mine[j]);
+        }
+        ok = ok && fabs(sr - r->sr) <= 1e-4 * fabs(sr) + 1e-6;
+        ok = ok && (m == 0 ? r->r2 == 0.0f : far == r->r2);
+        ok = ok && r->r2 <= max_r2 * (1.0f + (float)BAND);
+        int within_max = flann_within(f, &qs[q], max_r2 * (float)(1.0 - BAND));
+        uint32_t want = within_max < (int)k ? (uint32_t)within_max : k;
+        if (mode == PM_KNN_ATLEAST) {
+            ok = ok && m >= want;
+            /* all of FLANN's photons inside the radius are listed */
+            int inner = flann_within(f, &qs[q], r->r2 * (float)(1.0 - BAND));
+            for (int j = 0; ok && j < inner; ++j)
+                ok = in[f->idx[j]];
+            /* and nothing beyond it: the list is the photons within r */
+            int outer = flann_within(f, &qs[q], r->r2 * (float)(1.0 + BAND));
+            ok = ok && (int)m <= outer && (int)m >= inner;
+        } else {
+            /* FLANN's k nearest within the maximum radius */
+            int nn = f->np < k ? (int)f->np : (int)k, got = 0;
+            if (nn > 0) {
+                float qp[3] = {qs[q].px, qs[q].py, qs[q].pz};
+                flann_find_nearest_neighbors_index_float(f->index, qp, 1, f->idx, f->d, nn,
+                                                         &f->params);
+                for (int j = 0; j < nn; ++j)
+                    got += f->d[j] <= max_r2;
+            }
+            qsort(f->d, (size_t)got, sizeof *f->d, cmp_float);
+            qsort(mine, m, sizeof *mine, cmp_float);
+            /* a photon right at the maximum radius may fall either way */
+            int extra = (int)m - got;
+            if (extra != 0) {
+                float edge = extra > 0 ? mine[m - 1] : f->d[got - 1];
+                ok = ok && abs(extra) == 1 && fabsf(edge - max_r2) <= (float)BAND * max_r2;
+            }
+            int common = got < (int)m ? got : (int)m;
+            for (int j = 0; ok && j < common; ++j)
+                ok = fabsf(mine[j] - f->d[j]) <= (float)BAND * fmaxf(f->d[j], 1e-30f);
+        }
+        for (uint32_t j = 0; j < m && ind[q * cap + j] < f->np; ++j)
+            in[ind[q * cap + j]] = 0;
+        if (!ok) {
+            ++bad;
+            CHECK(0,
+                  "%s/%s: query %zu at (%g %g %g): count %u r2 %g flags %u shells %u, FLANN "
+                  "within max %d",
+                  name, mname, q, (double)qs[q].px, (double)qs[q].py, (double)qs[q].pz, m,
+                  (double)r->r2, r->flags, r->shells, within_max);
+        }
+    }
+    CHECK(bad == 0, "%s/%s: %zu queries differ from FLANN", name, mname, bad);
+    CHECK(cut * 10 <= nq, "%s/%s: %zu of %zu index lists were cut", name, mname, cut, nq);
+    free(in);
+    free(mine);
+}
+
+/* Runs both modes on every build, checks against FLANN and that the builds
+ * agree bit for bit. */
+static void run_case(fixture *fx, const char *name, const rt_grid_desc *desc, const pm_photon *ph,
+                     size_t np, const pm_query *qs, size_t nq, uint32_t k, float max_r)
+{
+    sluice_context *ctx = fx->ctx;
+    sluice_stream *sp = NULL, *sq = NULL, *sr = NULL, *si = NULL;
+    /* room for every photon of the map when that fits 64 MiB */
+    uint32_t cap = np < 8192 ? (uint32_t)(np ? np : 1) : 8192u;
+    if ((size_t)cap * nq > ((size_t)16 << 20))
+        cap = (uint32_t)(((size_t)16 << 20) / nq);
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_photon), np ? np : 1, &sp));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_query), nq, &sq));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_knn_result), nq, &sr));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, (size_t)cap * nq, &si));
+    CHECK_OK(ctx, sluice_stream_upload(sp, ph, np));
+    CHECK_OK(ctx, sluice_stream_upload(sq, qs, nq));
+    pm_knn_result *res = malloc(nq * sizeof *res), *first[2] = {NULL, NULL};
+    uint32_t *ind = malloc((size_t)cap * nq * sizeof *ind);
+    flann_ref f;
+    flann_ref_init(&f, ph, np);
+    for (int b = 0; b < 3; ++b) {
+        sr_point_grid_build_kind kind = (sr_point_grid_build_kind)b;
+        uint32_t slots = 0;
+        if (kind == SR_POINT_GRID_STENCIL) {
+            sr_point_grid_stats st;
+            sr_point_grid_statistics(fx->grid, &st);
+            slots = st.max_per_cell ? st.max_per_cell : 1;
+        }
+        sluice_status s =
+            sr_point_grid_build(fx->grid, desc, sp, sizeof(pm_photon), np, kind, slots);
+        CHECK(s == SLUICE_OK, "%s: build %d: %s", name, b, sr_point_grid_error(fx->grid));
+        if (s != SLUICE_OK)
+            continue;
+        for (int m = 0; m < 2; ++m) {
+            pm_knn_options o = {k, max_r, (pm_knn_mode)m, 0};
+            pm_knn_stats stats;
+            s = pm_knn_query_indices(fx->knn, fx->grid, sp, sq, nq, sr, &o, si, cap, &stats);
+            CHECK(s == SLUICE_OK, "%s: query: %s", name, pm_knn_error(fx->knn));
+            if (s != SLUICE_OK)
+                continue;
+            CHECK_OK(ctx, sluice_stream_download(sr, res, nq, NULL));
+            CHECK_OK(ctx, sluice_stream_download(si, ind, (size_t)cap * nq, NULL));
+            CHECK(stats.queries == nq && stats.passes >= 1 && stats.live[0] <= nq, "%s: statistics",
+                  name);
+            char full[128];
+            snprintf(full, sizeof full, "%s/build %d", name, b);
+            if (b == 0) {
+                check_against_flann(full, (pm_knn_mode)m, &f, ph, qs, nq, res, ind, cap, k, max_r);
+                first[m] = malloc(nq * sizeof *res);
+                memcpy(first[m], res, nq * sizeof *res);
+            } else {
+                CHECK(memcmp(first[m], res, nq * sizeof *res) == 0,
+                      "%s: mode %d: build %d differs from the counting build", name, m, b);
+            }
+        }
+    }
+    flann_ref_free(&f);
+    free(first[0]);
+    free(first[1]);
+    free(res);
+    free(ind);
+    sluice_stream_destroy(sp);
+    sluice_stream_destroy(sq);
+    sluice_stream_destroy(sr);
+    sluice_stream_destroy(si);
+}
+
+static void random_queries(pm_query *qs, size_t nq, float lo, float hi, uint32_t *seed)
+{
+    for (size_t i = 0; i < nq; ++i) {
+        qs[i].px = lo + (hi - lo) * frand(seed);
+        qs[i].py = lo + (hi - lo) * frand(seed);
+        qs[i].pz = lo + (hi - lo) * frand(seed);
+        qs[i].nx = 0.0f, qs[i].ny = 1.0f, qs[i].nz = 0.0f;
+        qs[i].id = (uint32_t)i;
+    }
+}
+
+static void set_photon(pm_photon *p, float x, float y, float z, uint32_t *seed)
+{
+    memset(p, 0, sizeof *p);
+    p->px = x, p->py = y, p->pz = z;
+    p->pr = 0.5f + frand(seed), p->pg = 1.0f, p->pb = 0.25f;
+    p->dy = frand(seed) < 0.5f ? -1.0f : 1.0f;
+}
+
+static rt_grid_desc desc_of(const float lo[3], const float hi[3], uint32_t nx, uint32_t ny,
+                            uint32_t nz)
+{
+    rt_grid_desc d;
+    char err[256];
+    const uint32_t dims[3] = {nx, ny, nz};
+    CHECK(sr_point_grid_desc_dims(lo, hi, dims, &d, err, sizeof err) == SLUICE_OK, "%s", err);
+    return d;
+}
+
+static void test_cases(fixture *fx)
+{
+    uint32_t seed = 2024;
+    size_t np_max = 40000, nq = 2000;
+    pm_photon *ph = malloc(np_max * sizeof *ph);
+    pm_query *qs = malloc(nq * sizeof *qs);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    char err[256];
+
+    /* random photons, an automatic grid, queries partly outside it */
+    for (size_t i = 0; i < 20000; ++i)
+        set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
+    rt_grid_desc d;
+    CHECK(sr_point_grid_desc_auto(lo, hi, 20000, 0.05f, &d, err, sizeof err) == SLUICE_OK, "%s",
+          err);
+    random_queries(qs, nq, -0.2f, 1.2f, &seed);
+    run_case(fx, "random k=16", &d, ph, 20000, qs, nq, 16, 0.2137f);
+    run_case(fx, "random k=100", &d, ph, 20000, qs, nq, 100, 0.3137f);
+    rt_grid_desc coarse = desc_of(lo, hi, 5, 3, 4);
+    run_case(fx, "random coarse k=40 r=inf", &coarse, ph, 20000, qs, nq, 40, INFINITY);
+
+    /* all photons in one cell of a 10^3 grid */
+    for (size_t i = 0; i < 5000; ++i)
+        set_photon(&ph[i], 0.42f + 0.05f * frand(&seed), 0.51f + 0.05f * frand(&seed),
+                   0.33f + 0.05f * frand(&seed), &seed);
+    rt_grid_desc ten = desc_of(lo, hi, 10, 10, 10);
+    random_queries(qs, nq, 0.0f, 1.0f, &seed);
+    run_case(fx, "one cell", &ten, ph, 5000, qs, nq, 50, 0.4137f);
+
+    /* many photons at one point (ties), among random ones */
+    for (size_t i = 0; i < 5000; ++i) {
+        if (i % 5 < 3)
+            set_photon(&ph[i], 0.5f, 0.25f, 0.75f, &seed);
+        else
+            set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
+    }
+    for (size_t i = 0; i < nq / 2; ++i)
+        qs[i].px = 0.5f + 0.02f * frand(&seed), qs[i].py = 0.25f, qs[i].pz = 0.75f;
+    run_case(fx, "ties", &ten, ph, 5000, qs, nq, 32, 0.1537f);
+
+    /* photons on cell faces, edges and corners; queries on them too */
+    size_t n = 0;
+    for (int x = 0; x <= 10; ++x)
+        for (int y = 0; y <= 10; ++y)
+            for (int z = 0; z <= 10; ++z) {
+                set_photon(&ph[n++], ten.lo[0] + (float)x * ten.cell[0],
+                           ten.lo[1] + (float)y * ten.cell[1], ten.lo[2] + (float)z * ten.cell[2],
+                           &seed);
+                set_photon(&ph[n++], ten.lo[0] + ((float)x + 0.5f) * ten.cell[0],
+                           ten.lo[1] + (float)y * ten.cell[1], ten.lo[2] + (float)z * ten.cell[2],
+                           &seed);
+            }
+    random_queries(qs, nq, 0.0f, 1.0f, &seed);
+    for (size_t i = 0; i < nq / 2; ++i)
+        qs[i] = (pm_query){ph[(i * 7) % n].px, ph[(i * 7) % n].py, ph[(i * 7) % n].pz, 0, 1, 0,
+                           (uint32_t)i};
+    run_case(fx, "lattice", &ten, ph, n, qs, nq, 20, 0.2537f);
+
+    /* a planar map on Purcell's 250x1x250 grid, queries on the plane */
+    for (size_t i = 0; i < 30000; ++i)
+        set_photon(&ph[i], frand(&seed), 0.5f, frand(&seed) * frand(&seed), &seed);
+    const float plo[3] = {0, 0.5f, 0}, phi[3] = {1, 0.5f, 1};
+    rt_grid_desc planar = desc_of(plo, phi, 250, 1, 250);
+    random_queries(qs, nq, 0.0f, 1.0f, &seed);
+    for (size_t i = 0; i < nq; ++i)
+        qs[i].py = i % 4 ? 0.5f : qs[i].py;
+    run_case(fx, "planar 250x1x250", &planar, ph, 30000, qs, nq, 64, 0.1037f);
+
+    /* fewer photons than k; an empty map */
+    for (size_t i = 0; i < 10; ++i)
+        set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
+    run_case(fx, "fewer than k", &ten, ph, 10, qs, nq, 32, INFINITY);
+    run_case(fx, "fewer than k, max radius", &ten, ph, 10, qs, nq, 32, 0.3f);
+    run_case(fx, "empty", &ten, ph, 0, qs, nq, 8, 0.5f);
+    free(ph);
+    free(qs);
+}
+
+/* Exact mode in batches (k large enough that the heaps of all queries do
+ * not fit PM_KNN_EXACT_HEAP_BYTES), and the normal filter. */
+static void test_batches_and_filter(fixture *fx)
+{
+    sluice_context *ctx = fx->ctx;
+    uint32_t seed = 77;
+    size_t np = 3000, nq = 700;
+    pm_photon *ph = malloc(np * sizeof *ph);
+    pm_query *qs = malloc(nq * sizeof *qs);
+    pm_knn_result *a = malloc(nq * sizeof *a), *b = malloc(nq * sizeof *b);
+    for (size_t i = 0; i < np; ++i)
+        set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
+    random_queries(qs, nq, 0.0f, 1.0f, &seed);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    rt_grid_desc d = desc_of(lo, hi, 8, 8, 8);
+    sluice_stream *sp = NULL, *sq = NULL, *sr = NULL;
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *ph, np, &sp));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *qs, nq, &sq));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *a, nq, &sr));
+    CHECK_OK(ctx, sluice_stream_upload(sp, ph, np));
+    CHECK_OK(ctx, sluice_stream_upload(sq, qs, nq));
+    CHECK_OK(ctx, sr_point_grid_build(fx->grid, &d, sp, sizeof *ph, np, SR_POINT_GRID_COUNT, 0));
+    /* k = 2^18: 2 MiB of heap per query, 32 queries per batch */
+    pm_knn_options o = {1u << 18, 0.3f, PM_KNN_EXACT, 0};
+    pm_knn_stats st;
+    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, &st));
+    CHECK(st.batches == (nq + 31) / 32, "batches %u", st.batches);
+    CHECK_OK(ctx, sluice_stream_download(sr, a, nq, NULL));
+    o.mode = PM_KNN_ATLEAST; /* with k above the photons, both find all within 0.3 */
+    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, &st));
+    CHECK(st.batches == 1 && st.hit_max_radius == nq, "atleast: %u batches, %zu at max radius",
+          st.batches, st.hit_max_radius);
+    CHECK_OK(ctx, sluice_stream_download(sr, b, nq, NULL));
+    size_t bad = 0;
+    for (size_t q = 0; q < nq; ++q) {
+        uint32_t want = 0;
+        for (size_t i = 0; i < np; ++i)
+            want += dist2(&ph[i], &qs[q]) <= 0.09f;
+        bad += a[q].count != want || b[q].count != want || a[q].r2 != b[q].r2 ||
+               fabsf(a[q].sr - b[q].sr) > 1e-4f * b[q].sr;
+    }
+    CHECK(bad == 0, "batched exact and atleast disagree with brute force on %zu queries", bad);
+    /* normal filter: only photons travelling against the normal (dy < 0
+     * for normal +y) */
+    o = (pm_knn_options){16, 0.25f, PM_KNN_ATLEAST, 1};
+    for (int m = 0; m < 2; ++m) {
+        o.mode = (pm_knn_mode)m;
+        CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, NULL));
+        CHECK_OK(ctx, sluice_stream_download(sr, b, nq, NULL));
+        bad = 0;
+        for (size_t q = 0; q < nq; ++q) {
+            uint32_t inside = 0, all = 0;
+            for (size_t i = 0; i < np; ++i) {
+                if (ph[i].dy >= 0.0f)
+                    continue;
+                float d2 = dist2(&ph[i], &qs[q]);
+                all += d2 <= 0.0625f;
+                inside += d2 <= b[q].r2;
+            }
+            uint32_t want = all < 16 ? all : 16;
+            bad += b[q].count < want || (m == 0 && b[q].count != inside) ||
+                   (m == 1 && b[q].count != want);
+        }
+        CHECK(bad == 0, "normal filter, mode %d: %zu queries wrong", m, bad);
+    }
+    sluice_stream_destroy(sp);
+    sluice_stream_destroy(sq);
+    sluice_stream_destroy(sr);
+    free(ph);
+    free(qs);
+    free(a);
+    free(b);
+}
+
+static void test_errors(fixture *fx)
+{
+    sluice_context *ctx = fx->ctx;
+    sluice_stream *sp = NULL, *sq = NULL, *sr = NULL, *s12 = NULL;
+    pm_photon ph[4] = {{0}};
+    pm_query qs[4] = {{0}};
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_photon), 4, &sp));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_query), 4, &sq));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_knn_result), 4, &sr));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 12, 4, &s12));
+    CHECK_OK(ctx, sluice_stream_upload(sp, ph, 4));
+    CHECK_OK(ctx, sluice_stream_upload(sq, qs, 4));
+    sr_point_grid *fresh = NULL;
+    CHECK_OK(ctx, sr_point_grid_create(ctx, &fresh));
+    pm_knn_options o = {8, 1.0f, PM_KNN_ATLEAST, 0};
+    CHECK(pm_knn_query(fx->knn, fresh, sp, sq, 4, sr, &o, NULL) == SLUICE_ERROR_INVALID_ARGUMENT,
+          "grid not built");
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    rt_grid_desc d = desc_of(lo, hi, 2, 2, 2);
+    CHECK_OK(ctx, sr_point_grid_build(fx->grid, &d, sp, sizeof(pm_photon), 4, 0, 0));
+    CHECK(pm_knn_create(ctx, NULL) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL out");
+    CHECK(pm_knn_query(NULL, fx->grid, sp, sq, 4, sr, &o, NULL) == SLUICE_ERROR_INVALID_ARGUMENT,
+          "NULL knn");
+    CHECK(pm_knn_query(fx->knn, fx->grid, s12, sq, 4, sr, &o, NULL) ==
+              SLUICE_ERROR_INVALID_ARGUMENT,
+          "photon record size");
+    CHECK(pm_knn_query(fx->knn, fx->grid, sp, sq, 5, sr, &o, NULL) == SLUICE_ERROR_INVALID_ARGUMENT,
+          "n above the queries");
+    CHECK(pm_knn_query(fx->knn, fx->grid, sp, sq, 4, s12, &o, NULL) ==
+              SLUICE_ERROR_INVALID_ARGUMENT,
+          "result record size");
+    pm_knn_options bad = o;
+    bad.k = 0;
+    CHECK(pm_knn_query(fx->knn, fx->grid, sp, sq, 4, sr, &bad, NULL) ==
+              SLUICE_ERROR_INVALID_ARGUMENT,
+          "k = 0");
+    bad = o;
+    bad.max_radius = NAN;
+    CHECK(pm_knn_query(fx->knn, fx->grid, sp, sq, 4, sr, &bad, NULL) ==
+              SLUICE_ERROR_INVALID_ARGUMENT,
+          "NaN radius");
+    bad = o;
+    bad.mode = (pm_knn_mode)5;
+    CHECK(pm_knn_query(fx->knn, fx->grid, sp, sq, 4, sr, &bad, NULL) ==
+              SLUICE_ERROR_INVALID_ARGUMENT,
+          "mode");
+    CHECK(pm_knn_query_indices(fx->knn, fx->grid, sp, sq, 4, sr, &o, s12, 0, NULL) ==
+              SLUICE_ERROR_INVALID_ARGUMENT,
+          "cap 0");
+    CHECK(*pm_knn_error(fx->knn) != '\0', "a message");
+    /* a query at NaN finds nothing and says so */
+    qs[1].px = NAN;
+    CHECK_OK(ctx, sluice_stream_upload(sq, qs, 4));
+    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, 4, sr, &o, NULL));
+    pm_knn_result r[4];
+    CHECK_OK(ctx, sluice_stream_download(sr, r, 4, NULL));
+    CHECK(r[1].count == 0 && (r[1].flags & PM_KNN_BAD_QUERY) && r[0].count == 4,
+          "NaN query: count %u flags %u; others %u", r[1].count, r[1].flags, r[0].count);
+    sr_point_grid_destroy(fresh);
+    sluice_stream_destroy(sp);
+    sluice_stream_destroy(sq);
+    sluice_stream_destroy(sr);
+    sluice_stream_destroy(s12);
+}
+
+int main(void)
+{
+    fixture fx = {0};
+    fx.ctx = check_context(0);
+    CHECK_OK(fx.ctx, sr_point_grid_create(fx.ctx, &fx.grid));
+    CHECK_OK(fx.ctx, pm_knn_create(fx.ctx, &fx.knn));
+    if (fx.grid && fx.knn) {
+        test_errors(&fx);
+        test_batches_and_filter(&fx);
+        test_cases(&fx);
+    }
+    pm_knn_destroy(fx.knn);
+    sr_point_grid_destroy(fx.grid);
+    sluice_context_destroy(fx.ctx);
+    return check_summary();
+}
