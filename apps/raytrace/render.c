@@ -28,6 +28,7 @@ struct rt_renderer {
     sluice_counters *counters;
     sr_film *film;
     sluice_stream *rays, *next, *hits, *shadow, *shadow_hits;
+    sluice_stream *gather; /* rt_gather (one record when not gathering) */
     char skipped[384];
     size_t per_shadow, per_secondary;
     rt_render_stats stats;
@@ -43,7 +44,7 @@ void rt_renderer_destroy(rt_renderer *r)
     sluice_program_destroy(r->program);
     sluice_counters_destroy(r->counters);
     sr_film_destroy(r->film);
-    sluice_stream *s[] = {r->rays, r->next, r->hits, r->shadow, r->shadow_hits};
+    sluice_stream *s[] = {r->rays, r->next, r->hits, r->shadow, r->shadow_hits, r->gather};
     for (size_t i = 0; i < sizeof s / sizeof *s; ++i)
         sluice_stream_destroy(s[i]);
     free(r);
@@ -57,7 +58,8 @@ static size_t bytes_of(sluice_stream *s)
 static void update_bytes(rt_renderer *r)
 {
     r->stats.stream_bytes = bytes_of(r->rays) + bytes_of(r->next) + bytes_of(r->hits) +
-                            bytes_of(r->shadow) + bytes_of(r->shadow_hits) + sr_film_bytes(r->film);
+                            bytes_of(r->shadow) + bytes_of(r->shadow_hits) + bytes_of(r->gather) +
+                            sr_film_bytes(r->film);
 }
 
 /* The shading program: eye rays and shading built for the render mode and
@@ -70,7 +72,7 @@ static sluice_status build_program(rt_renderer *r, const sr_scene_stats *ss)
     int mirror = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_MIRROR));
     int glass = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_GLASS));
     char opts[160];
-    snprintf(opts, sizeof opts, "%s%s%s%s",
+    snprintf(opts, sizeof opts, "%s%s%s%s%s", r->opt.gather ? " -DRT_GATHER" : "",
              r->ds->layout == SR_TRI_VERTICES ? " -DRT_WATERTIGHT" : "",
              mirror ? " -DRT_HAS_MIRROR" : "", glass ? " -DRT_HAS_GLASS" : "",
              ss->has_normals ? " -DRT_HAS_NORMALS" : "");
@@ -175,6 +177,8 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     if (st == SLUICE_OK)
         st = sluice_stream_create(ctx, sizeof(rt_hit), shadow_cap, &r->shadow_hits);
     if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, sizeof(rt_gather), opt->gather ? pixels : 1, &r->gather);
+    if (st == SLUICE_OK)
         st = sr_film_create(ctx, opt->width, opt->height, &r->film, NULL, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_counters(r->k_shade, r->counters);
@@ -222,6 +226,12 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
         st = sluice_kernel_set_stream(k, 5 + i, bufs[i], 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(k, 14, sizeof r->frame, &r->frame);
+    if (st == SLUICE_OK && r->opt.gather)
+        st = ensure(r->gather, count);
+    if (st == SLUICE_OK)
+        st = sluice_stream_clear(r->gather);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(k, 15, 2, r->gather, SLUICE_UNORDERED);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch_count(k, count);
     size_t ns = 0;
@@ -238,6 +248,11 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
         if (st == SLUICE_OK)
             st = sluice_kernel_launch(r->k_resolve);
     }
+    size_t ng = 0;
+    if (st == SLUICE_OK && r->opt.gather)
+        st = sluice_stream_length(r->gather, &ng);
+    if (st == SLUICE_OK && ng)
+        st = r->opt.gather(r->opt.gather_user, r->gather, ng);
     uint32_t c[SC_COUNT];
     if (st == SLUICE_OK)
         st = sluice_counters_read(r->counters, c);

@@ -28,6 +28,13 @@ typedef struct rt_render_options {
     unsigned max_depth;     /**< bounces (whitted, path) */
     unsigned light_samples; /**< shadow rays per area light and hit */
     uint32_t seed;
+    /** Whitted mode only, may be NULL: called after each shading slice with
+     *  the gather points (rt_gather records, device stream, `n` of them) of
+     *  the diffuse and glossy hits, so that a caller adds what the shading
+     *  does not know (the photon mapper's radiance estimate) to the film
+     *  before the stream is reused. Returning an error stops the sample. */
+    sluice_status (*gather)(void *user, sluice_stream *points, size_t n);
+    void *gather_user;
 } rt_render_options;
 
 /** Per-kind ray counts and shading work (Purcell Table 5.2). */

@@ -67,4 +67,19 @@ typedef struct pm_knn_params {
                              a shell look farther than a photon in it */
 } pm_knn_params;
 
+/** rt_ray.flags of a photon ray whose path so far went only through
+ *  mirrors and glass (it becomes a PM_PHOTON_CAUSTIC photon). */
+#define PM_RAY_SPECULAR 32u
+
+/** What pm_emit (pm_photon.cl) needs besides buffers (by value). */
+typedef struct pm_emit_args {
+    rt_u32 seed, base;   /* key seed, index of the first photon of this batch */
+    rt_u32 area_lights;  /* emissive triangles */
+    rt_u32 point_lights;
+    float area_prob;     /* probability of leaving an area light */
+    float area_total;    /* total emissive area */
+    float scene_eps;
+    rt_u32 pad;
+} pm_emit_args;
+
 #endif /* SLUICE_PM_TYPES_H */

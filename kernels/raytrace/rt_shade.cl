@@ -13,7 +13,9 @@
  *
  * Build options: RT_HAS_MIRROR, RT_HAS_GLASS (reflection and refraction code
  * is compiled only when the scene has such materials), RT_HAS_NORMALS,
- * RT_WATERTIGHT (the layout of the triangle records).
+ * RT_WATERTIGHT (the layout of the triangle records), RT_GATHER (the photon
+ * mapper's renderer: diffuse and glossy hits in the whitted mode also emit a
+ * gather point, output 2, where the radiance estimate is added).
  * Shade counters: 0 shading calculations, 1 shadow rays, 2 reflection rays,
  * 3 refraction rays, 4 path rays, 5 non-finite contributions dropped.
  */
@@ -21,6 +23,7 @@
 
 #define RT_EMIT_SHADOW(cond, ray) SLUICE_EMIT_IF(0, shadow, ray, cond)
 #define RT_EMIT_SECONDARY(cond, ray) SLUICE_EMIT_IF(1, secondary, ray, cond)
+#define RT_EMIT_GATHER(cond, g) SLUICE_EMIT_IF(2, gather, g, cond)
 
 /* Shades rays [base, base + count) of a wave (launched over count). */
 __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt_hit *hits,
@@ -28,7 +31,8 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
                        global long *accum, global const float *tv, global const uint *indices,
                        global const float *normals, global const uint *tri_mat,
                        global const rt_material *mats, global const rt_point_light *plights,
-                       global const uint *area_tris, global const float *area_cdf, const rt_frame f)
+                       global const uint *area_tris, global const float *area_cdf, const rt_frame f,
+                       global rt_gather *gather)
 {
     SLUICE_FOR_EACH (id) {
         uint i = base + id;
@@ -93,6 +97,25 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
                                         RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
             SLUICE_COUNT(1, go);
         }
+#ifdef RT_GATHER
+        {
+            rt_gather g;
+            g.px = s.p.x;
+            g.py = s.p.y;
+            g.pz = s.p.z;
+            g.nx = s.n.x;
+            g.ny = s.n.y;
+            g.nz = s.n.z;
+            g.pixel = ray.pixel;
+            float3 wg = w * rt_albedo(&s.m) / RT_PI;
+            g.wr = wg.x;
+            g.wg = wg.y;
+            g.wb = wg.z;
+            RT_EMIT_GATHER(!specular && f.mode == RT_MODE_WHITTED && rt_max3(wg) > 0.0f, g);
+        }
+#else
+        (void)gather;
+#endif
         uint child_depth = (depth + 1u) << RT_DEPTH_SHIFT;
         int deeper = depth + 1u <= f.max_depth;
         float cos_i = dot(s.n, wo);

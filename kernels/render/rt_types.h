@@ -144,6 +144,21 @@ typedef struct rt_frame {
     rt_u32 jitter;      /* non-zero: jitter the eye ray inside its pixel */
 } rt_frame;
 
+/**
+ * A gather point: a diffuse or glossy surface that an eye path reached, where
+ * the photon mapper adds its radiance estimate (Purcell 6.2.4): position,
+ * unit normal facing the viewer, the pixel, and the weight the estimate is
+ * multiplied by (the path's throughput times the diffuse BRDF, albedo / pi).
+ * Emitted by rt_shade when the shading program is built with RT_GATHER.
+ * 40 bytes.
+ */
+typedef struct rt_gather {
+    float px, py, pz;
+    float nx, ny, nz;
+    rt_u32 pixel;
+    float wr, wg, wb;
+} rt_gather;
+
 /* Render modes (rt_frame.mode). */
 #define RT_MODE_CAST 0u
 #define RT_MODE_SHADOW 1u

@@ -1,0 +1,376 @@
+/*
+ * sluice-photonmap: Purcell's photon mapper (thesis ch. 6) on Sluice. Parses
+ * the command line, loads the scene, traces photons, builds the photon map,
+ * renders samples with progress and checkpoints, writes the image and the
+ * statistics (Purcell's Table 6.1 phases and more).
+ */
+#include "cli.h"
+#include "clock.h"
+#include "photonmap.h"
+#include "progressive.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PROG "sluice-photonmap"
+
+static void usage(FILE *out)
+{
+    fputs("usage: " PROG " [options]\n"
+          "Renders a scene with Purcell's GPU photon mapper on OpenCL: photons traced as\n"
+          "streams, a photon map built as a uniform grid (bitonic sort, stencil routing or\n"
+          "counting sort), the kNN-grid radiance estimate at diffuse hits, direct light\n"
+          "by shadow rays, mirrors and glass followed (thesis ch. 6).\n\n",
+          out);
+    sr_cli_common_usage(out);
+    fputs("\nphoton mapper options:\n"
+          "  --photons N              photons to store (default: the scene's, else 16000)\n"
+          "  --k N                    photons sought per radiance estimate (default: the\n"
+          "                           scene's, else 64)\n"
+          "  --max-radius R           largest search radius, scene units (default: 3 times\n"
+          "                           the radius k photons would take spread evenly)\n"
+          "  --map M                  count | bitonic | stencil: how the photon map grid is\n"
+          "                           built (default count)\n"
+          "  --slots M                stencil: places per cell, m*m (default 256, m = 16)\n"
+          "  --grid WxHxD|auto        photon-map grid cells (default auto: cells about the\n"
+          "                           expected search radius); Purcell's: 250x1x250 (glassball,\n"
+          "                           ring), 25x25x50 (cornell)\n"
+          "  --knn atleast|exact      Purcell's at-least-k search or Jensen's k nearest\n"
+          "                           (default atleast)\n"
+          "  --spp N                  samples per pixel (default 1; with --time and no\n"
+          "                           --spp, as many as the time allows)\n"
+          "  --light-samples N        shadow rays per area light and hit (default: the scene's)\n"
+          "  --max-depth N            mirror/glass bounces of eye rays and photon bounces\n"
+          "                           (default: the scene's)\n"
+          "  --exec stream|fused      the tracer's execution mode (default stream)\n\n"
+          "Ctrl-C finishes the current sample, writes the image so far and exits with 130.\n\n"
+          "examples:\n"
+          "  " PROG " --scene glassball --out glassball.png\n"
+          "  " PROG " --scene ring --map stencil --grid 250x1x250 --stats ring.json\n"
+          "  " PROG " --scene cornell --photons 65000 --k 500 --grid 25x25x50 --light-samples 32\n",
+          out);
+}
+
+typedef struct cli {
+    sr_cli_common common;
+    pm_options opt;
+    unsigned spp;
+    int have_spp, have_photons, have_k, have_ls, have_depth;
+} cli;
+
+static int parse(int argc, char **argv, cli *c)
+{
+    memset(c, 0, sizeof *c);
+    sr_cli_common_init(&c->common);
+    c->opt = pm_options_default();
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout);
+            return -1;
+        }
+        int r = sr_cli_common_parse(PROG, argc, argv, &i, &c->common);
+        if (r == 2)
+            return 2;
+        if (r == 1)
+            continue;
+        if (strncmp(a, "--", 2) != 0)
+            return sr_cli_bad(PROG, a, NULL, "unexpected argument");
+        if (i + 1 >= argc)
+            return sr_cli_bad(PROG, a, NULL, "needs a value");
+        const char *v = argv[++i];
+        int k;
+        if (!strcmp(a, "--photons")) {
+            if (!sr_cli_uint(v, 1, 1u << 26, &c->opt.photons))
+                return sr_cli_bad(PROG, a, v, "expected a whole number from 1 to 67108864");
+            c->have_photons = 1;
+        } else if (!strcmp(a, "--k")) {
+            if (!sr_cli_uint(v, 1, 65536, &c->opt.k))
+                return sr_cli_bad(PROG, a, v, "expected a whole number from 1 to 65536");
+            c->have_k = 1;
+        } else if (!strcmp(a, "--max-radius")) {
+            double r;
+            if (!sr_cli_double(v, 1e-30, 1e30, &r))
+                return sr_cli_bad(PROG, a, v, "expected a positive number");
+            c->opt.max_radius = (float)r;
+        } else if (!strcmp(a, "--map")) {
+            if ((k = sr_cli_choice(v, (const char *const[]){"count", "bitonic", "stencil", NULL})) <
+                0)
+                return sr_cli_bad(PROG, a, v, "expected count, bitonic or stencil");
+            c->opt.map = k == 0 ? SR_POINT_GRID_COUNT
+                                : (k == 1 ? SR_POINT_GRID_BITONIC : SR_POINT_GRID_STENCIL);
+        } else if (!strcmp(a, "--slots")) {
+            if (!sr_cli_uint(v, 1, SR_POINT_GRID_MAX_SLOTS, &c->opt.slots))
+                return sr_cli_bad(PROG, a, v, "expected a whole number from 1 to 65536");
+        } else if (!strcmp(a, "--grid")) {
+            unsigned d[3];
+            char x1, x2;
+            int n = 0;
+            if (!strcmp(v, "auto")) {
+                memset(c->opt.grid_dims, 0, sizeof c->opt.grid_dims);
+            } else if (sscanf(v, "%u%c%u%c%u%n", &d[0], &x1, &d[1], &x2, &d[2], &n) == 5 &&
+                       (size_t)n == strlen(v) && x1 == 'x' && x2 == 'x' && v[0] != '-' && d[0] &&
+                       d[1] && d[2] && d[0] <= 4096 && d[1] <= 4096 && d[2] <= 4096 &&
+                       (unsigned long long)d[0] * d[1] * d[2] <= (1u << 26)) {
+                memcpy(c->opt.grid_dims, d, sizeof d);
+            } else {
+                return sr_cli_bad(PROG, a, v,
+                                  "expected auto or WxHxD (1 .. 4096 each, at most 2^26 cells)");
+            }
+        } else if (!strcmp(a, "--knn")) {
+            if ((k = sr_cli_choice(v, (const char *const[]){"atleast", "exact", NULL})) < 0)
+                return sr_cli_bad(PROG, a, v, "expected atleast or exact");
+            c->opt.knn = k ? PM_KNN_EXACT : PM_KNN_ATLEAST;
+        } else if (!strcmp(a, "--spp")) {
+            if (!sr_cli_uint(v, 1, 1u << 20, &c->spp))
+                return sr_cli_bad(PROG, a, v, "expected a whole number from 1 to 1048576");
+            c->have_spp = 1;
+        } else if (!strcmp(a, "--light-samples")) {
+            if (!sr_cli_uint(v, 1, 1024, &c->opt.light_samples))
+                return sr_cli_bad(PROG, a, v, "expected a whole number from 1 to 1024");
+            c->have_ls = 1;
+        } else if (!strcmp(a, "--max-depth")) {
+            if (!sr_cli_uint(v, 0, 64, &c->opt.max_depth))
+                return sr_cli_bad(PROG, a, v, "expected a whole number from 0 to 64");
+            c->have_depth = 1;
+        } else if (!strcmp(a, "--exec")) {
+            if ((k = sr_cli_choice(v, (const char *const[]){"stream", "fused", NULL})) < 0)
+                return sr_cli_bad(PROG, a, v, "expected stream or fused");
+            c->opt.tracer.exec = k ? RT_EXEC_FUSED : RT_EXEC_STREAM;
+        } else {
+            return sr_cli_bad(PROG, a, NULL, "unknown option");
+        }
+    }
+    return sr_cli_common_finish(PROG, &c->common);
+}
+
+typedef struct run {
+    pm_renderer *r;
+    const char *out;
+    char err[1024];
+} run;
+
+static sluice_status sample(void *user)
+{
+    run *u = user;
+    sluice_status st = pm_renderer_sample(u->r, u->err, sizeof u->err);
+    if (st != SLUICE_OK)
+        fprintf(stderr, PROG ": %s\n", u->err);
+    return st;
+}
+
+static sluice_status write_image(run *u, size_t *bad)
+{
+    char err[512] = "";
+    const pm_stats *s = pm_renderer_stats(u->r);
+    sluice_status st = sr_film_write(pm_renderer_film(u->r), 1.0 / (s->samples ? s->samples : 1),
+                                     u->out, bad, err, sizeof err);
+    if (st != SLUICE_OK)
+        fprintf(stderr, PROG ": writing %s: %s\n", u->out, err[0] ? err : sluice_status_string(st));
+    return st;
+}
+
+static sluice_status checkpoint(void *user)
+{
+    return write_image(user, NULL);
+}
+
+static const char *const map_names[] = {"count", "bitonic", "stencil"};
+
+/* The statistics as text (table) or JSON (same figures). */
+static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_renderer *r,
+                   double total, unsigned spp, sluice_context *ctx)
+{
+    const pm_stats *s = pm_renderer_stats(r);
+    const pm_photon_stats *p = &s->photons;
+    const sr_point_grid_stats *m = &s->map;
+    const rt_trace_stats *ts = rt_tracer_stats(pm_renderer_tracer(r));
+    const rt_render_stats *rs = rt_renderer_stats(pm_renderer_whitted(r));
+    double mean_found = s->queries ? (double)s->found / (double)s->queries : 0;
+    double mean_radius = s->with_photons ? s->radius_sum / (double)s->with_photons : 0;
+    const rt_grid_desc *g = &s->map_grid;
+    unsigned passes = s->samples ? s->knn_passes / s->samples : 0;
+    if (!json) {
+        fprintf(f, "scene %s, %ux%u, %u spp, map %s, kNN %s, k %u, max radius %g\n",
+                c->common.scene, o->width, o->height, spp, map_names[o->map],
+                o->knn == PM_KNN_EXACT ? "exact" : "atleast", o->k, (double)s->max_radius);
+        fprintf(f,
+                "phases (s): trace photons %.3f, build map %.3f, trace rays %.3f, radiance "
+                "estimate %.3f, total %.3f\n",
+                s->trace_photons_s, s->build_map_s, s->trace_rays_s, s->estimate_s, total);
+        fprintf(f,
+                "photons: emitted %llu, stored %llu (caustic %llu), left the scene %llu, "
+                "absorbed %llu, depth limit %llu, %u bounce passes in %u batches\n",
+                (unsigned long long)p->emitted, (unsigned long long)p->stored,
+                (unsigned long long)p->caustic, (unsigned long long)p->left_scene,
+                (unsigned long long)p->absorbed, (unsigned long long)p->depth_limit, p->passes,
+                p->batches);
+        fprintf(f,
+                "photon map: grid %ux%ux%u, occupied cells %zu, per cell max %u mean %.1f, "
+                "stencil overflow %zu photons in %zu cells\n",
+                g->dims[0], g->dims[1], g->dims[2], m->occupied_cells, m->max_per_cell,
+                m->mean_per_occupied, m->overflow_points, m->overfull_cells);
+        fprintf(f,
+                "estimates: %llu, photons per estimate %.1f, mean radius %.4g, at max radius "
+                "%llu, kNN passes per sample %u, live after pass:",
+                (unsigned long long)s->queries, mean_found, mean_radius,
+                (unsigned long long)s->hit_max_radius, passes);
+        for (unsigned i = 0; i < PM_KNN_STATS_PASSES && s->live[i]; ++i)
+            fprintf(f, " %u", s->live[i]);
+        fprintf(f,
+                "\nrays: eye %llu, shadow %llu, reflection %llu, refraction %llu, photon "
+                "flights %llu; traced %llu\n",
+                (unsigned long long)rs->rays[RT_KIND_EYE],
+                (unsigned long long)rs->rays[RT_KIND_SHADOW],
+                (unsigned long long)rs->rays[RT_KIND_REFLECT],
+                (unsigned long long)rs->rays[RT_KIND_REFRACT],
+                (unsigned long long)(p->emitted + p->bounced), (unsigned long long)ts->rays);
+        fprintf(f, "skipped: %s\n", pm_renderer_skipped(r));
+        if (sluice_profile_enabled(ctx))
+            sluice_profile_print(ctx, f);
+        return;
+    }
+    fprintf(f, "{\n  \"program\": \"" PROG "\",\n  \"scene\": \"");
+    for (const char *q = c->common.scene; *q; ++q)
+        fprintf(f, (*q == '"' || *q == '\\') ? "\\%c" : ((unsigned char)*q < 32 ? "?" : "%c"), *q);
+    fprintf(f,
+            "\",\n  \"width\": %u, \"height\": %u, \"spp\": %u, \"map\": \"%s\", \"knn\": "
+            "\"%s\", \"k\": %u, \"max_radius\": %g,\n",
+            o->width, o->height, spp, map_names[o->map],
+            o->knn == PM_KNN_EXACT ? "exact" : "atleast", o->k, (double)s->max_radius);
+    fprintf(f,
+            "  \"phases\": {\"trace_photons\": %.6f, \"build_map\": %.6f, \"trace_rays\": %.6f, "
+            "\"radiance_estimate\": %.6f, \"total\": %.6f},\n",
+            s->trace_photons_s, s->build_map_s, s->trace_rays_s, s->estimate_s, total);
+    fprintf(f,
+            "  \"photons\": {\"emitted\": %llu, \"stored\": %llu, \"caustic\": %llu, "
+            "\"left_scene\": %llu, \"absorbed\": %llu, \"depth_limit\": %llu, \"nonfinite\": "
+            "%llu, \"passes\": %u, \"batches\": %u},\n",
+            (unsigned long long)p->emitted, (unsigned long long)p->stored,
+            (unsigned long long)p->caustic, (unsigned long long)p->left_scene,
+            (unsigned long long)p->absorbed, (unsigned long long)p->depth_limit,
+            (unsigned long long)p->nonfinite, p->passes, p->batches);
+    fprintf(f,
+            "  \"map_grid\": {\"dims\": [%u, %u, %u], \"cells\": %zu, \"occupied\": %zu, "
+            "\"max_per_cell\": %u, \"mean_per_occupied\": %.3f, \"overflow_points\": %zu, "
+            "\"overfull_cells\": %zu},\n",
+            g->dims[0], g->dims[1], g->dims[2], m->cells, m->occupied_cells, m->max_per_cell,
+            m->mean_per_occupied, m->overflow_points, m->overfull_cells);
+    fprintf(f,
+            "  \"estimates\": {\"count\": %llu, \"mean_photons\": %.3f, \"mean_radius\": %.6g, "
+            "\"hit_max_radius\": %llu, \"passes\": %u, \"live_per_pass\": [",
+            (unsigned long long)s->queries, mean_found, mean_radius,
+            (unsigned long long)s->hit_max_radius, s->knn_passes);
+    for (unsigned i = 0; i < PM_KNN_STATS_PASSES && s->live[i]; ++i)
+        fprintf(f, "%s%u", i ? ", " : "", s->live[i]);
+    fprintf(f,
+            "]},\n  \"rays\": {\"eye\": %llu, \"shadow\": %llu, \"reflection\": %llu, "
+            "\"refraction\": %llu, \"traced\": %llu},\n",
+            (unsigned long long)rs->rays[RT_KIND_EYE], (unsigned long long)rs->rays[RT_KIND_SHADOW],
+            (unsigned long long)rs->rays[RT_KIND_REFLECT],
+            (unsigned long long)rs->rays[RT_KIND_REFRACT], (unsigned long long)ts->rays);
+    fprintf(f, "  \"skipped\": \"%s\"\n}\n", pm_renderer_skipped(r));
+}
+
+int main(int argc, char **argv)
+{
+    cli c;
+    int rc = parse(argc, argv, &c);
+    if (rc)
+        return rc < 0 ? 0 : rc;
+    const sr_cli_common *cc = &c.common;
+    char err[1024] = "";
+    sr_scene_load_options lo;
+    memset(&lo, 0, sizeof lo);
+    lo.flags = SR_SCENE_DEFAULT_LIGHT;
+    sr_scene *scene = NULL;
+    sluice_status st = sr_scene_load(cc->scene, &lo, &scene, err, sizeof err);
+    if (st != SLUICE_OK) {
+        fprintf(stderr, PROG ": --scene %s: %s\n", cc->scene, err);
+        return 1;
+    }
+    const sr_render_settings *rs = sr_scene_render_settings(scene);
+    const sr_camera *cam = sr_scene_camera(scene);
+    pm_options *o = &c.opt;
+    o->width = cc->width ? cc->width : cam->width;
+    o->height = cc->height ? cc->height : cam->height;
+    o->seed = cc->seed;
+    if (!c.have_photons && rs->photons)
+        o->photons = rs->photons;
+    if (!c.have_k && rs->photon_lookup)
+        o->k = rs->photon_lookup;
+    if (!c.have_ls)
+        o->light_samples = rs->light_samples ? rs->light_samples : 1;
+    if (!c.have_depth)
+        o->max_depth = rs->max_depth;
+    unsigned spp = c.have_spp ? c.spp : 1;
+    if (cc->time_limit > 0 && !c.have_spp)
+        spp = 1u << 20;
+
+    sluice_context_options co;
+    memset(&co, 0, sizeof co);
+    co.device = cc->device;
+    co.profile = cc->profile;
+    sluice_context *ctx = NULL;
+    pm_renderer *r = NULL;
+    int exit_code = 1;
+    st = sluice_context_create(&co, &ctx, err, sizeof err);
+    if (st != SLUICE_OK) {
+        fprintf(stderr, PROG ": OpenCL: %s\n", err);
+        goto done;
+    }
+    st = pm_renderer_create(ctx, scene, o, &r, err, sizeof err);
+    if (st != SLUICE_OK) {
+        fprintf(stderr, PROG ": %s\n", err);
+        goto done;
+    }
+    if (cc->profile)
+        sluice_profile_reset(ctx);
+    double t0 = sr_clock_seconds();
+    if (cc->progress)
+        fprintf(stderr, PROG ": tracing %u photons and building the photon map\n", o->photons);
+    st = pm_renderer_prepare(r, err, sizeof err);
+    if (st != SLUICE_OK) {
+        fprintf(stderr, PROG ": %s\n", err);
+        goto done;
+    }
+    run u;
+    memset(&u, 0, sizeof u);
+    u.r = r;
+    u.out = cc->out;
+    sr_progressive prog = {"samples", spp, cc->time_limit, cc->checkpoint, cc->progress, stderr};
+    sr_progressive_result pr;
+    st = sr_progressive_run(&prog, sample, checkpoint, &u, &pr);
+    if (st != SLUICE_OK)
+        goto done;
+    double total = sr_clock_seconds() - t0;
+    size_t bad = 0;
+    if (write_image(&u, &bad) != SLUICE_OK)
+        goto done;
+    if (bad)
+        fprintf(stderr, PROG ": warning: %zu non-finite pixels written as black\n", bad);
+    if (!cc->quiet)
+        report(stderr, 0, &c, o, r, total, pr.done, ctx);
+    if (cc->stats) {
+        FILE *f = fopen(cc->stats, "w");
+        if (!f) {
+            fprintf(stderr, PROG ": --stats %s: cannot write the file\n", cc->stats);
+            goto done;
+        }
+        report(f, 1, &c, o, r, total, pr.done, ctx);
+        if (fclose(f) != 0) {
+            fprintf(stderr, PROG ": --stats %s: write failed\n", cc->stats);
+            goto done;
+        }
+    }
+    if (pr.interrupted)
+        fprintf(stderr, PROG ": interrupted after %u of %u samples; wrote %s\n", pr.done, spp,
+                cc->out);
+    exit_code = pr.interrupted ? 130 : 0;
+done:
+    pm_renderer_destroy(r);
+    sluice_context_destroy(ctx);
+    sr_scene_destroy(scene);
+    return exit_code;
+}

@@ -1,0 +1,368 @@
+/* See photonmap.h. */
+#include "photonmap.h"
+#include "app_error.h"
+#include "clock.h"
+#include "kernels.h"
+#include "skipped.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PM_PI 3.14159265358979323846
+
+/* Gather counters (pm_render.cl). */
+enum { GC_ADDED = 0, GC_EMPTY, GC_NONFINITE, GC_COUNT };
+
+struct pm_renderer {
+    sluice_context *ctx;
+    const sr_scene *scene;
+    pm_options opt;
+    rt_tracer *tracer;
+    rt_renderer *whitted;
+    pm_photons *photons;
+    sr_point_grid *grid;
+    pm_knn *knn;
+    sluice_program *program;
+    sluice_kernel *k_queries, *k_add;
+    sluice_counters *counters;
+    sluice_stream *queries, *results;
+    sluice_stream *map; /* the photons (owned by `photons`) */
+    size_t map_count;
+    int prepared;
+    float max_radius;
+    double estimate_in_sample; /* seconds of estimates during the current sample */
+    sluice_status gather_status;
+    char *err; /* the current call's message buffer (gather writes there) */
+    size_t err_size;
+    pm_stats stats;
+    char skipped[768];
+};
+
+pm_options pm_options_default(void)
+{
+    pm_options o;
+    memset(&o, 0, sizeof o);
+    o.width = 512;
+    o.height = 384;
+    o.seed = 1;
+    o.light_samples = 1;
+    o.max_depth = 5;
+    o.photons = 16000;
+    o.k = 64;
+    o.map = SR_POINT_GRID_COUNT;
+    o.slots = 256;
+    o.knn = PM_KNN_ATLEAST;
+    o.tracer = rt_tracer_options_default();
+    return o;
+}
+
+void pm_renderer_destroy(pm_renderer *r)
+{
+    if (!r)
+        return;
+    rt_renderer_destroy(r->whitted);
+    pm_photons_destroy(r->photons);
+    sr_point_grid_destroy(r->grid);
+    pm_knn_destroy(r->knn);
+    sluice_kernel_destroy(r->k_queries);
+    sluice_kernel_destroy(r->k_add);
+    sluice_program_destroy(r->program);
+    sluice_counters_destroy(r->counters);
+    sluice_stream_destroy(r->queries);
+    sluice_stream_destroy(r->results);
+    rt_tracer_destroy(r->tracer);
+    free(r);
+}
+
+/* The area of the surfaces photons are stored on (diffuse and glossy). */
+static double storing_area(const sr_scene *sc)
+{
+    const float *p = sr_scene_positions(sc);
+    const uint32_t *ix = sr_scene_indices(sc);
+    const uint32_t *tm = sr_scene_triangle_materials(sc);
+    const sr_material *m = sr_scene_materials(sc);
+    double area = 0;
+    for (size_t t = 0; t < sr_scene_triangle_count(sc); ++t) {
+        sr_material_kind kind = m[tm[t]].kind;
+        if (kind != SR_MATERIAL_DIFFUSE && kind != SR_MATERIAL_GLOSSY)
+            continue;
+        const float *a = p + 3 * ix[3 * t], *b = p + 3 * ix[3 * t + 1], *c = p + 3 * ix[3 * t + 2];
+        double u[3], v[3];
+        for (int k = 0; k < 3; ++k) {
+            u[k] = b[k] - a[k];
+            v[k] = c[k] - a[k];
+        }
+        double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
+               z = u[0] * v[1] - u[1] * v[0];
+        area += 0.5 * sqrt(x * x + y * y + z * z);
+    }
+    return area;
+}
+
+static sluice_status gather(void *user, sluice_stream *points, size_t n);
+
+sluice_status pm_renderer_create(sluice_context *ctx, const sr_scene *scene, const pm_options *opt,
+                                 pm_renderer **out, char *err, size_t err_size)
+{
+    if (out)
+        *out = NULL;
+    if (!ctx || !scene || !opt || !out || opt->k == 0 || opt->k > PM_KNN_MAX_K ||
+        !(opt->max_radius >= 0) || (unsigned)opt->map > (unsigned)SR_POINT_GRID_STENCIL ||
+        opt->slots == 0 || opt->slots > SR_POINT_GRID_MAX_SLOTS) {
+        sr_set_error(err, err_size, "photon mapper: bad options");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    pm_renderer *r = calloc(1, sizeof *r);
+    if (!r) {
+        sr_set_error(err, err_size, "out of host memory");
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    r->ctx = ctx;
+    r->scene = scene;
+    r->opt = *opt;
+    r->err = err;
+    r->err_size = err_size;
+    sluice_status st = rt_tracer_create(ctx, scene, &opt->tracer, &r->tracer, err, err_size);
+    rt_render_options ro;
+    memset(&ro, 0, sizeof ro);
+    ro.mode = RT_MODE_WHITTED;
+    ro.width = opt->width;
+    ro.height = opt->height;
+    ro.max_depth = opt->max_depth;
+    ro.light_samples = opt->light_samples;
+    ro.seed = opt->seed;
+    ro.gather = gather;
+    ro.gather_user = r;
+    if (st == SLUICE_OK)
+        st = rt_renderer_create(r->tracer, &ro, &r->whitted, err, err_size);
+    if (st == SLUICE_OK)
+        st = pm_photons_create(r->tracer, &r->photons, err, err_size);
+    if (st != SLUICE_OK) {
+        pm_renderer_destroy(r);
+        return st;
+    }
+    const sr_device_scene *ds = rt_tracer_scene(r->tracer);
+    static const char *const names[] = {"rt_types.h", "pm_types.h", "triangle.cl",
+                                        "film.cl",    "surface.cl", "pm_render.cl"};
+    st = sr_program_create(ctx, names, sizeof names / sizeof *names,
+                           ds->layout == SR_TRI_VERTICES ? "-DRT_WATERTIGHT" : "", &r->program);
+    if (st == SLUICE_OK)
+        st = sluice_program_build(r->program);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(r->program, "pm_gather_queries", &r->k_queries);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(r->program, "pm_gather_add", &r->k_add);
+    static const char *const ctr[] = {"estimates", "empty", "nonfinite"};
+    if (st == SLUICE_OK)
+        st = sluice_counters_create(ctx, GC_COUNT, ctr, &r->counters);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_counters(r->k_add, r->counters);
+    size_t pixels = (size_t)opt->width * opt->height;
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, sizeof(pm_query), pixels, &r->queries);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, sizeof(pm_knn_result), pixels, &r->results);
+    if (st == SLUICE_OK)
+        st = sr_point_grid_create(ctx, &r->grid);
+    if (st == SLUICE_OK)
+        st = pm_knn_create(ctx, &r->knn);
+    if (st != SLUICE_OK) {
+        sr_set_error(err, err_size, "photon mapper: %s", sluice_context_error(ctx));
+        pm_renderer_destroy(r);
+        return st;
+    }
+    *out = r;
+    return SLUICE_OK;
+}
+
+sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
+{
+    if (!r)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (r->prepared)
+        return SLUICE_OK;
+    pm_photon_options po = {r->opt.photons, r->opt.max_depth, r->opt.seed};
+    sluice_status st = pm_photons_trace(r->photons, &po, &r->map, &r->map_count, &r->stats.photons);
+    r->stats.trace_photons_s = r->stats.photons.seconds;
+    if (st != SLUICE_OK) {
+        sr_set_error(err, err_size, "tracing photons: %s", sluice_context_error(r->ctx));
+        return st;
+    }
+    /* Search radius and grid: the expected radius of k photons spread evenly
+     * over the storing surfaces is sqrt(k A / (pi N)); the maximum radius is
+     * three times that (denser places, caustics, end well inside it). The
+     * cells are a quarter of the expected radius: photons crowd into
+     * caustics, and cells as large as the radius there make every estimate
+     * take whole cells (blocky caustics on glassball; a quarter is about
+     * Purcell's 250x1x250 there). */
+    const sr_scene_stats *ss = sr_scene_statistics(r->scene);
+    double area = storing_area(r->scene);
+    size_t n = r->map_count ? r->map_count : 1;
+    float expected = (float)sqrt((double)r->opt.k * (area > 0 ? area : 1.0) / (PM_PI * (double)n));
+    float diag = 0;
+    for (int k = 0; k < 3; ++k)
+        diag += (ss->bounds_max[k] - ss->bounds_min[k]) * (ss->bounds_max[k] - ss->bounds_min[k]);
+    diag = sqrtf(diag);
+    if (!(expected > 0) || !isfinite(expected))
+        expected = diag > 0 ? diag / 16 : 1.0f;
+    r->max_radius = r->opt.max_radius > 0 ? r->opt.max_radius : fminf(3.0f * expected, diag);
+    if (!(r->max_radius > 0))
+        r->max_radius = 1.0f;
+    r->stats.max_radius = r->max_radius;
+    char msg[256] = "";
+    if (r->opt.grid_dims[0])
+        st = sr_point_grid_desc_dims(ss->bounds_min, ss->bounds_max, r->opt.grid_dims,
+                                     &r->stats.map_grid, msg, sizeof msg);
+    else
+        st = sr_point_grid_desc_auto(ss->bounds_min, ss->bounds_max, n, expected / 4.0f,
+                                     &r->stats.map_grid, msg, sizeof msg);
+    if (st != SLUICE_OK) {
+        sr_set_error(err, err_size, "photon map grid: %s", msg);
+        return st;
+    }
+    double t0 = sr_clock_seconds();
+    st = sr_point_grid_build(r->grid, &r->stats.map_grid, r->map, sizeof(pm_photon), r->map_count,
+                             r->opt.map, r->opt.slots);
+    r->stats.build_map_s = sr_clock_seconds() - t0;
+    if (st == SLUICE_OK)
+        st = sr_point_grid_statistics(r->grid, &r->stats.map);
+    if (st != SLUICE_OK) {
+        sr_set_error(err, err_size, "building the photon map: %s", sr_point_grid_error(r->grid));
+        return st;
+    }
+    char *k = r->skipped;
+    size_t ks = sizeof r->skipped;
+    snprintf(k, ks, "%s", r->stats.photons.skipped);
+    sr_skipped_add(k, ks, r->map_count == 0, "radiance estimates (no photons stored)");
+    sr_skipped_add(k, ks, 1, "finished estimates (leave the kNN stream after their last pass)");
+    sr_skipped_add(k, ks, 1, rt_renderer_skipped(r->whitted));
+    sr_skipped_add(k, ks, 1, rt_tracer_skipped(r->tracer));
+    r->prepared = 1;
+    return SLUICE_OK;
+}
+
+/* The Whitted renderer's gather hook: the estimates of n gather points. */
+static sluice_status gather(void *user, sluice_stream *points, size_t n)
+{
+    pm_renderer *r = user;
+    if (r->map_count == 0)
+        return SLUICE_OK;
+    double t0 = sr_clock_seconds();
+    sluice_status st = SLUICE_OK;
+    if (sluice_stream_capacity(r->queries) < n)
+        st = sluice_stream_grow(r->queries, n);
+    if (st == SLUICE_OK && sluice_stream_capacity(r->results) < n)
+        st = sluice_stream_grow(r->results, n);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_input(r->k_queries, 0, points);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(r->k_queries, 1, r->queries, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch(r->k_queries);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(r->queries, n);
+    pm_knn_options ko = {r->opt.k, r->max_radius, r->opt.knn, 1};
+    pm_knn_stats ks;
+    if (st == SLUICE_OK) {
+        st = pm_knn_query(r->knn, r->grid, r->map, r->queries, n, r->results, &ko, &ks);
+        if (st != SLUICE_OK) {
+            sr_set_error(r->err, r->err_size, "radiance estimate: %s", pm_knn_error(r->knn));
+            r->gather_status = st;
+            return st;
+        }
+    }
+    if (st == SLUICE_OK)
+        st = sluice_counters_reset(r->counters);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_input(r->k_add, 0, points);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(r->k_add, 1, r->results, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(r->k_add, 2, sr_film_accum(rt_renderer_film(r->whitted)), 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch(r->k_add);
+    uint32_t c[GC_COUNT];
+    if (st == SLUICE_OK)
+        st = sluice_counters_read(r->counters, c);
+    if (st != SLUICE_OK) {
+        sr_set_error(r->err, r->err_size, "radiance estimate: %s", sluice_context_error(r->ctx));
+        r->gather_status = st;
+        return st;
+    }
+    pm_stats *s = &r->stats;
+    s->queries += ks.queries;
+    s->found += (uint64_t)llround(ks.mean_count * (double)ks.queries);
+    s->with_photons += ks.queries - ks.empty;
+    s->radius_sum += ks.mean_radius * (double)(ks.queries - ks.empty);
+    s->hit_max_radius += ks.hit_max_radius;
+    s->nonfinite += c[GC_NONFINITE];
+    s->knn_passes += ks.passes;
+    for (unsigned i = 0; i < PM_KNN_STATS_PASSES; ++i)
+        s->live[i] += ks.live[i];
+    r->estimate_in_sample += sr_clock_seconds() - t0;
+    return SLUICE_OK;
+}
+
+sluice_status pm_renderer_sample(pm_renderer *r, char *err, size_t err_size)
+{
+    if (!r)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    sluice_status st = pm_renderer_prepare(r, err, err_size);
+    if (st != SLUICE_OK)
+        return st;
+    r->err = err;
+    r->err_size = err_size;
+    r->gather_status = SLUICE_OK;
+    r->estimate_in_sample = 0;
+    double t0 = sr_clock_seconds();
+    st = rt_renderer_sample(r->whitted);
+    double t = sr_clock_seconds() - t0;
+    r->stats.estimate_s += r->estimate_in_sample;
+    r->stats.trace_rays_s += t - r->estimate_in_sample;
+    if (st != SLUICE_OK) {
+        if (r->gather_status == SLUICE_OK)
+            sr_set_error(err, err_size, "rendering: %s", sluice_context_error(r->ctx));
+        return st;
+    }
+    r->stats.samples++;
+    return SLUICE_OK;
+}
+
+sr_film *pm_renderer_film(pm_renderer *r)
+{
+    return r ? rt_renderer_film(r->whitted) : NULL;
+}
+
+rt_tracer *pm_renderer_tracer(pm_renderer *r)
+{
+    return r ? r->tracer : NULL;
+}
+
+rt_renderer *pm_renderer_whitted(pm_renderer *r)
+{
+    return r ? r->whitted : NULL;
+}
+
+const pm_stats *pm_renderer_stats(const pm_renderer *r)
+{
+    return r ? &r->stats : NULL;
+}
+
+sluice_stream *pm_renderer_photons(pm_renderer *r, size_t *count)
+{
+    if (count)
+        *count = r ? r->map_count : 0;
+    return r ? r->map : NULL;
+}
+
+const sr_point_grid *pm_renderer_map(const pm_renderer *r)
+{
+    return r ? r->grid : NULL;
+}
+
+const char *pm_renderer_skipped(pm_renderer *r)
+{
+    return r ? r->skipped : "";
+}

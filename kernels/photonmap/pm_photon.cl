@@ -1,0 +1,167 @@
+/*
+ * pm_photon.cl: photon tracing as streams (Purcell 6.2.1). Photons leave the
+ * lights as rays of kind RT_KIND_PHOTON, go through the same tracer as every
+ * other ray (kernels/render/rt_*.cl), and a bounce pass over each photon with
+ * its hit decides, by conditional outputs, whether it is stored (output 0:
+ * a pm_photon at a diffuse or glossy surface), bounced (output 1: the next
+ * photon ray) or dropped (left the scene, absorbed by Russian roulette, past
+ * the depth limit). The host loops until the bounced stream is empty.
+ *
+ * Power: a photon carries the flux of its light divided by the probability
+ * of choosing that light, point and direction; the host divides the stored
+ * powers by the number of photons emitted (pm_photon_map), so the map holds
+ * flux per photon, Phi / N (Jensen 2001, ch. 5).
+ *
+ * Photons are stored only after at least one bounce: direct light is
+ * computed with shadow rays (Purcell 6.2.4), so the map holds indirect light
+ * and caustics, and direct light is not counted twice.
+ *
+ * Build options: RT_HAS_MIRROR, RT_HAS_GLASS, RT_HAS_NORMALS, RT_WATERTIGHT
+ * as for the ray tracer's shading. Counters: 0 stored, 1 bounced, 2 left the
+ * scene, 3 absorbed (Russian roulette or black surface), 4 past the depth
+ * limit, 5 non-finite power dropped, 6 caustic photons stored.
+ */
+#include "sluice.cl"
+
+/* Emits photon i of the batch: from an area light (a point by area, a
+ * cosine-weighted direction about its normal: flux Le pi A / p_area) or a
+ * point light (uniform direction: flux 4 pi I n_point / (1 - p_area)). */
+__kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv,
+                      global const uint *tri_mat, global const rt_material *mats,
+                      global const rt_point_light *plights, global const uint *area_tris,
+                      global const float *area_cdf, const pm_emit_args a)
+{
+    SLUICE_FOR_EACH (i) {
+        uint key = rt_key(rt_key(a.seed, 0x9407u), a.base + i);
+        float3 o, d, power;
+        float3 off;
+        if (a.area_lights && rt_rand(key, 0u) < a.area_prob) {
+            float3 q, ln;
+            uint lt = rt_area_light_sample(rt_rand(key, 1u), rt_rand(key, 2u), rt_rand(key, 3u),
+                                           a.area_lights, area_tris, area_cdf, tv, &q, &ln);
+            rt_material m = mats[tri_mat[lt]];
+            d = rt_cosine_dir(ln, rt_rand(key, 4u), rt_rand(key, 5u));
+            power = (float3)(m.er, m.eg, m.eb) * (RT_PI * a.area_total / a.area_prob);
+            o = q;
+            off = ln * a.scene_eps;
+        } else {
+            uint l = min((uint)(rt_rand(key, 1u) * (float)a.point_lights), a.point_lights - 1u);
+            rt_point_light pl = plights[l];
+            d = rt_uniform_sphere(rt_rand(key, 2u), rt_rand(key, 3u));
+            power = (float3)(pl.ir, pl.ig, pl.ib) *
+                    (4.0f * RT_PI * (float)a.point_lights / (1.0f - a.area_prob));
+            o = (float3)(pl.px, pl.py, pl.pz);
+            off = (float3)(0.0f);
+        }
+        rays[i] = rt_spawn(o, off, d, INFINITY, power, 0u, key, RT_KIND_PHOTON | PM_RAY_SPECULAR);
+    }
+}
+
+#define PM_STORE(cond, ph) SLUICE_EMIT_IF(0, stored, ph, cond)
+#define PM_BOUNCE(cond, ray) SLUICE_EMIT_IF(1, bounced, ray, cond)
+
+/* One bounce of every photon of the stream: store, bounce or drop. */
+__kernel void pm_bounce(SLUICE_PARAMS, global const rt_ray *rays, global const rt_hit *hits,
+                        global pm_photon *stored, global rt_ray *bounced,
+                        global const float *tv, global const uint *indices,
+                        global const float *normals, global const uint *tri_mat,
+                        global const rt_material *mats, uint max_depth, float scene_eps)
+{
+    SLUICE_FOR_EACH (i) {
+        rt_ray ray = rays[i];
+        rt_hit h = hits[i];
+        int hit = h.tri != RT_NO_HIT;
+        SLUICE_COUNT(2, !hit);
+        rt_surface s;
+        uint depth = (ray.flags & RT_DEPTH_MASK) >> RT_DEPTH_SHIFT;
+        int specular_path = (ray.flags & PM_RAY_SPECULAR) != 0u;
+        float3 d = (float3)(ray.dx, ray.dy, ray.dz);
+        float3 w = (float3)(ray.wr, ray.wg, ray.wb);
+        int store = 0, go = 0, bad = 0;
+        float3 wb = (float3)(0.0f), dir = d, off = (float3)(0.0f);
+        uint kind = 0u;
+        if (hit) {
+            s = rt_surface_at(&ray, &h, tv, indices, normals, tri_mat, mats);
+            kind = s.m.kind;
+            int specular = kind == 1u || kind == 2u;
+            float3 wo = -d;
+            off = s.ng * scene_eps;
+            bad = !(isfinite(w.x) && isfinite(w.y) && isfinite(w.z));
+            /* stored where the estimate reads it: diffuse and glossy surfaces,
+             * after at least one bounce (direct light has shadow rays) */
+            store = !specular && depth >= 1u && !bad;
+            float cos_i = dot(s.n, wo);
+            float3 refl = d + s.n * (2.0f * cos_i);
+            if (!specular) {
+                /* Russian roulette on the albedo (Jensen 2001, 5.3): survive
+                 * with the probability of the largest channel of f cos / pdf */
+                float3 wi = rt_cosine_dir(s.n, rt_rand(ray.key, 1u), rt_rand(ray.key, 2u));
+                float3 a = rt_brdf(&s.m, s.n, wi, wo) * RT_PI;
+                float q = fmin(rt_max3(a), 1.0f);
+                go = rt_rand(ray.key, 3u) < q && dot(s.ng, wi) > 0.0f;
+                wb = w * a / fmax(q, 1e-20f);
+                dir = wi;
+            }
+#ifdef RT_HAS_MIRROR
+            if (kind == 1u) {
+                wb = w * rt_specular(&s.m);
+                dir = refl;
+                go = 1;
+            }
+#endif
+#ifdef RT_HAS_GLASS
+            if (kind == 2u) {
+                float eta = s.front ? 1.0f / s.m.ior : s.m.ior;
+                float k2 = 1.0f - eta * eta * (1.0f - cos_i * cos_i);
+                int tir = k2 < 0.0f;
+                float cos_t = tir ? 0.0f : sqrt(k2);
+                float fr = tir ? 1.0f : rt_fresnel(cos_i, cos_t, s.front, s.m.ior);
+                int pick_r = rt_rand(ray.key, 4u) < fr;
+                wb = w * rt_specular(&s.m);
+                dir = pick_r ? refl : normalize(d * eta + s.n * (eta * cos_i - cos_t));
+                off = pick_r ? off : -off;
+                go = 1;
+            }
+#endif
+            go = go && !bad && rt_max3(wb) > 0.0f;
+            SLUICE_COUNT(3, !go && !bad);
+        }
+        int deeper = depth + 1u <= max_depth;
+        SLUICE_COUNT(4, go && !deeper);
+        go = go && deeper;
+        SLUICE_COUNT(5, bad);
+        pm_photon ph;
+        if (hit) {
+            ph.px = s.p.x;
+            ph.py = s.p.y;
+            ph.pz = s.p.z;
+        } else {
+            ph.px = ph.py = ph.pz = 0.0f;
+        }
+        ph.pr = w.x;
+        ph.pg = w.y;
+        ph.pb = w.z;
+        ph.dx = d.x;
+        ph.dy = d.y;
+        ph.dz = d.z;
+        ph.flags = min(depth, 255u) | (specular_path ? PM_PHOTON_CAUSTIC : 0u);
+        PM_STORE(store, ph);
+        SLUICE_COUNT(0, store);
+        SLUICE_COUNT(6, store && specular_path);
+        uint spec_bit = (specular_path && (kind == 1u || kind == 2u)) ? PM_RAY_SPECULAR : 0u;
+        PM_BOUNCE(go, rt_spawn(hit ? s.p : (float3)(0.0f), off, dir, INFINITY, wb, 0u,
+                               rt_key(ray.key, depth + 7u),
+                               RT_KIND_PHOTON | spec_bit | ((depth + 1u) << RT_DEPTH_SHIFT)));
+        SLUICE_COUNT(1, go);
+    }
+}
+
+/* Multiplies the power of every photon by `s` (1 / photons emitted). */
+__kernel void pm_scale_power(SLUICE_PARAMS, global pm_photon *ph, float s)
+{
+    SLUICE_FOR_EACH (i) {
+        ph[i].pr *= s;
+        ph[i].pg *= s;
+        ph[i].pb *= s;
+    }
+}
