@@ -53,7 +53,10 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
             o = (float3)(pl.px, pl.py, pl.pz);
             off = (float3)(0.0f);
         }
-        rays[i] = rt_spawn(o, off, d, INFINITY, power, 0u, key, RT_KIND_PHOTON | PM_RAY_SPECULAR);
+        /* the flight gets a key of its own: the bounce reads dimensions 1-4,
+         * which emission used to choose this photon's light and direction */
+        rays[i] = rt_spawn(o, off, d, INFINITY, power, 0u, rt_key(key, 0x51u),
+                           RT_KIND_PHOTON | PM_RAY_SPECULAR);
     }
 }
 
