@@ -386,9 +386,9 @@ static void test_desc(void)
     const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 2};
     CHECK(sr_point_grid_desc_auto(lo, hi, 65000, 0.05f, &d, err, sizeof err) == SLUICE_OK, "%s",
           err);
-    CHECK(d.dims[0] == 21 && d.dims[1] == 21 && d.dims[2] == 41, "auto dims %u %u %u", d.dims[0],
+    CHECK(d.dims[0] == 27 && d.dims[1] == 27 && d.dims[2] == 54, "auto dims %u %u %u", d.dims[0],
           d.dims[1], d.dims[2]);
-    CHECK(fabsf(d.cell[0] - 0.05f) < 1e-3f && d.lo[0] <= 0.0f && d.hi[2] >= 2.0f, "auto cell %g",
+    CHECK(fabsf(d.cell[0] - 0.0375f) < 1e-3f && d.lo[0] <= 0.0f && d.hi[2] >= 2.0f, "auto cell %g",
           (double)d.cell[0]);
     /* capped by the point count */
     CHECK(sr_point_grid_desc_auto(lo, hi, 100, 0.001f, &d, err, sizeof err) == SLUICE_OK, "%s",
@@ -399,7 +399,7 @@ static void test_desc(void)
     const float flo[3] = {0, 3, 0}, fhi[3] = {1, 3, 1};
     CHECK(sr_point_grid_desc_auto(flo, fhi, 65000, 0.1f, &d, err, sizeof err) == SLUICE_OK, "%s",
           err);
-    CHECK(d.dims[1] == 1 && d.dims[0] == 11 && d.lo[1] < 3.0f && d.hi[1] > 3.0f, "flat %u %u %u",
+    CHECK(d.dims[1] == 1 && d.dims[0] == 14 && d.lo[1] < 3.0f && d.hi[1] > 3.0f, "flat %u %u %u",
           d.dims[0], d.dims[1], d.dims[2]);
     CHECK(sr_point_grid_desc_auto(lo, hi, 10, 0.0f, &d, err, sizeof err) ==
               SLUICE_ERROR_INVALID_ARGUMENT,

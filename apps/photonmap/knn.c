@@ -13,12 +13,12 @@
  * PM_KNN_EXACT_HEAP_BYTES. */
 #include "knn.h"
 
+#include "app_error.h"
 #include "kernels.h"
 
 #include "../../kernels/render/pg_types.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -60,20 +60,8 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static sluice_status fail(pm_knn *knn, sluice_status st, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-
-static sluice_status fail(pm_knn *knn, sluice_status st, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(knn->message, sizeof knn->message, fmt, ap);
-    va_end(ap);
-    return st;
-}
+/* Records why a call failed in knn->message and evaluates to `st`. */
+#define FAIL(knn, st, ...) (sr_set_error((knn)->message, sizeof(knn)->message, __VA_ARGS__), (st))
 
 /* One pass of the loop. */
 static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
@@ -184,19 +172,19 @@ static sluice_status check_stream(pm_knn *knn, sluice_stream *s, const char *wha
                                   size_t n, int need_length)
 {
     if (!s)
-        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL %s stream", what);
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL %s stream", what);
     if (sluice_stream_record_size(s) != size)
-        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT,
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT,
                     "kNN: %s records are %zu bytes, %zu expected", what,
                     sluice_stream_record_size(s), size);
     size_t have = sluice_stream_capacity(s);
     if (need_length) {
         sluice_status st = sluice_stream_length(s, &have);
         if (st != SLUICE_OK)
-            return fail(knn, st, "kNN: %s", sluice_context_error(knn->ctx));
+            return FAIL(knn, st, "kNN: %s", sluice_context_error(knn->ctx));
     }
     if (have < n)
-        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: %s holds %zu records, %zu needed",
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: %s holds %zu records, %zu needed",
                     what, have, n);
     return SLUICE_OK;
 }
@@ -239,21 +227,21 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (stats)
         memset(stats, 0, sizeof *stats);
     if (!grid || !o)
-        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL argument");
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL argument");
     if (o->k == 0 || o->k > PM_KNN_MAX_K)
-        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: k = %u (1 .. %u allowed)", o->k,
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: k = %u (1 .. %u allowed)", o->k,
                     PM_KNN_MAX_K);
     if (!(o->max_radius > 0.0f)) /* also NaN; INFINITY is fine */
-        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: the maximum radius must be > 0");
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: the maximum radius must be > 0");
     if (o->mode != PM_KNN_ATLEAST && o->mode != PM_KNN_EXACT)
-        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: unknown mode %d", (int)o->mode);
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: unknown mode %d", (int)o->mode);
     if (n > UINT32_MAX / 2)
-        return fail(knn, SLUICE_ERROR_LIMIT, "kNN: %zu queries exceed the limit of %u", n,
+        return FAIL(knn, SLUICE_ERROR_LIMIT, "kNN: %zu queries exceed the limit of %u", n,
                     UINT32_MAX / 2);
     sr_point_grid_view v;
     sluice_status st = sr_point_grid_get(grid, &v);
     if (st != SLUICE_OK || !v.order || !v.cells)
-        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: the point grid is not built");
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: the point grid is not built");
     st = check_stream(knn, photons, "photon", sizeof(pm_photon), v.points, 1);
     if (st == SLUICE_OK)
         st = check_stream(knn, queries, "query", sizeof(pm_query), n, 1);
@@ -261,7 +249,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         st = check_stream(knn, results, "result", sizeof(pm_knn_result), n, 0);
     if (st == SLUICE_OK && indices) {
         if (cap == 0 || (uint64_t)n * cap > UINT32_MAX)
-            return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT,
+            return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT,
                         "kNN: an index list of %u places per query for %zu queries", cap, n);
         st = check_stream(knn, indices, "index", 4, n * cap, 0);
     }
@@ -369,7 +357,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (stats && n) {
         pm_knn_result *r = malloc(n * sizeof *r);
         if (!r)
-            return fail(knn, SLUICE_ERROR_OUT_OF_MEMORY, "kNN: statistics: out of host memory");
+            return FAIL(knn, SLUICE_ERROR_OUT_OF_MEMORY, "kNN: statistics: out of host memory");
         st = sluice_stream_download(results, r, n, NULL);
         double sum_count = 0.0, sum_radius = 0.0;
         size_t with = 0;
@@ -397,8 +385,8 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
 
 runtime_fail:
     if (st == SLUICE_ERROR_OUT_OF_MEMORY && !*sluice_context_error(knn->ctx))
-        return fail(knn, st, "kNN: %s: out of memory", step);
-    return fail(knn, st, "kNN: %s: %s", step, sluice_context_error(knn->ctx));
+        return FAIL(knn, st, "kNN: %s: out of memory", step);
+    return FAIL(knn, st, "kNN: %s: %s", step, sluice_context_error(knn->ctx));
 }
 
 sluice_status pm_knn_query(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,
@@ -418,6 +406,6 @@ sluice_status pm_knn_query_indices(pm_knn *knn, const sr_point_grid *grid, sluic
     if (!knn)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     if (!indices)
-        return fail(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL index stream");
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL index stream");
     return query(knn, grid, photons, queries, n, results, options, indices, cap, stats);
 }

@@ -31,7 +31,6 @@
 #include "../../kernels/render/pg_types.h"
 
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -58,20 +57,8 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static sluice_status fail(sr_point_grid *g, sluice_status st, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-
-static sluice_status fail(sr_point_grid *g, sluice_status st, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(g->message, sizeof g->message, fmt, ap);
-    va_end(ap);
-    return st;
-}
+/* Records why a call failed in g->message and evaluates to `st`. */
+#define FAIL(g, st, ...) (sr_set_error((g)->message, sizeof(g)->message, __VA_ARGS__), (st))
 
 void sr_point_grid_destroy(sr_point_grid *g)
 {
@@ -174,6 +161,21 @@ static sluice_status launch(sluice_kernel *k, size_t count)
     return count ? sluice_kernel_launch_count(k, count) : SLUICE_OK;
 }
 
+/* Launches a generator kernel over `count` records with the counters zeroed
+ * and bound, and reads them back (waits) into c[0 .. 2]. */
+static sluice_status launch_counted(sr_point_grid *g, sluice_kernel *k, size_t count, uint32_t c[3])
+{
+    c[0] = c[1] = c[2] = 0;
+    sluice_status st = sluice_counters_reset(g->counters);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_counters(k, g->counters);
+    if (st == SLUICE_OK)
+        st = launch(k, count);
+    if (st == SLUICE_OK)
+        st = sluice_counters_read(g->counters, c);
+    return st;
+}
+
 static sluice_status fill(sr_point_grid *g, sluice_stream *s, size_t n, uint32_t value)
 {
     sluice_status st = sluice_kernel_set_stream(g->k_fill, 0, s, 0);
@@ -227,15 +229,9 @@ static sluice_status finish_compact(sr_point_grid *g, uint32_t cells)
         st = sluice_kernel_set_stream(k, 2, g->count, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 3, g->arrived, 0);
-    if (st == SLUICE_OK)
-        st = sluice_counters_reset(g->counters);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_counters(k, g->counters);
-    if (st == SLUICE_OK)
-        st = launch(k, cells);
     uint32_t c[3] = {0, 0, 0};
     if (st == SLUICE_OK)
-        st = sluice_counters_read(g->counters, c);
+        st = launch_counted(g, k, cells, c);
     g->stats.occupied_cells = c[0];
     return st;
 }
@@ -261,15 +257,9 @@ static sluice_status build_stencil(sr_point_grid *g, size_t n, uint32_t cells, u
         st = sluice_kernel_set_arg(k, 4, sizeof slots, &slots);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(k, 5, sizeof cells, &cells);
-    if (st == SLUICE_OK)
-        st = sluice_counters_reset(g->counters);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_counters(k, g->counters);
-    if (st == SLUICE_OK)
-        st = launch(k, cells);
     uint32_t c[3] = {0, 0, 0};
     if (st == SLUICE_OK)
-        st = sluice_counters_read(g->counters, c);
+        st = launch_counted(g, k, cells, c);
     g->view.order = g->order;
     g->stats.occupied_cells = c[0];
     g->stats.overfull_cells = c[1];
@@ -337,38 +327,38 @@ sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sl
     memset(&g->view, 0, sizeof g->view);
     memset(&g->stats, 0, sizeof g->stats);
     if (!desc || !points)
-        return fail(g, SLUICE_ERROR_INVALID_ARGUMENT, "point grid: NULL argument");
+        return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT, "point grid: NULL argument");
     size_t cells = 0;
     sluice_status st = rt_grid_desc_check(desc, &cells, g->message, sizeof g->message);
     if (st != SLUICE_OK)
         return st;
     if (stride < 12 || stride % 4 || stride != sluice_stream_record_size(points))
-        return fail(g, SLUICE_ERROR_INVALID_ARGUMENT,
+        return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT,
                     "point grid: a stride of %zu bytes for records of %zu (it must be the "
                     "record size, a multiple of 4 and at least 12)",
                     stride, sluice_stream_record_size(points));
     if (kind != SR_POINT_GRID_COUNT && kind != SR_POINT_GRID_BITONIC &&
         kind != SR_POINT_GRID_STENCIL)
-        return fail(g, SLUICE_ERROR_INVALID_ARGUMENT, "point grid: unknown build %d", (int)kind);
+        return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT, "point grid: unknown build %d", (int)kind);
     if (kind != SR_POINT_GRID_STENCIL)
         slots = 0;
     else if (slots == 0 || slots > SR_POINT_GRID_MAX_SLOTS)
-        return fail(g, SLUICE_ERROR_INVALID_ARGUMENT,
+        return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT,
                     "point grid: %u slots per cell (1 .. %u allowed)", slots,
                     SR_POINT_GRID_MAX_SLOTS);
     else if ((size_t)slots * cells > SR_POINT_GRID_MAX_FOOTPRINT)
-        return fail(g, SLUICE_ERROR_LIMIT,
+        return FAIL(g, SLUICE_ERROR_LIMIT,
                     "point grid: %zu cells x %u slots exceed the limit of %zu places", cells, slots,
                     SR_POINT_GRID_MAX_FOOTPRINT);
     if (n > SR_POINT_GRID_MAX_POINTS)
-        return fail(g, SLUICE_ERROR_LIMIT, "point grid: %zu points exceed the limit of %zu", n,
+        return FAIL(g, SLUICE_ERROR_LIMIT, "point grid: %zu points exceed the limit of %zu", n,
                     SR_POINT_GRID_MAX_POINTS);
     size_t len = 0;
     st = sluice_stream_length(points, &len);
     if (st != SLUICE_OK)
-        return fail(g, st, "point grid: %s", sluice_context_error(g->ctx));
+        return FAIL(g, st, "point grid: %s", sluice_context_error(g->ctx));
     if (n > len)
-        return fail(g, SLUICE_ERROR_INVALID_ARGUMENT,
+        return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT,
                     "point grid: %zu points asked for, the stream holds %zu", n, len);
 
     const uint32_t nc = (uint32_t)cells;
@@ -393,7 +383,7 @@ sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sl
         goto runtime_fail;
 
     step = "keying the points";
-    uint32_t bad = 0;
+    uint32_t c[3] = {0, 0, 0};
     st = sluice_kernel_set_stream(g->k_key, 0, points, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(g->k_key, 1, sizeof p, &p);
@@ -402,19 +392,14 @@ sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sl
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(g->k_key, 3, g->values, 0);
     if (st == SLUICE_OK)
-        st = sluice_counters_reset(g->counters);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_counters(g->k_key, g->counters);
-    if (st == SLUICE_OK)
-        st = launch(g->k_key, n);
+        st = launch_counted(g, g->k_key, n, c);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(g->keys, n);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(g->values, n);
-    if (st == SLUICE_OK)
-        st = sluice_counters_read(g->counters, &bad);
     if (st != SLUICE_OK)
         goto runtime_fail;
+    const uint32_t bad = c[0];
 
     step = kind == SR_POINT_GRID_COUNT     ? "counting sort"
            : kind == SR_POINT_GRID_BITONIC ? "bitonic sort"
@@ -466,8 +451,8 @@ runtime_fail:
     memset(&g->view, 0, sizeof g->view);
     memset(&g->stats, 0, sizeof g->stats);
     if (st == SLUICE_ERROR_OUT_OF_MEMORY && !*sluice_context_error(g->ctx))
-        return fail(g, st, "point grid: %s: out of memory", step);
-    return fail(g, st, "point grid: %s: %s", step, sluice_context_error(g->ctx));
+        return FAIL(g, st, "point grid: %s: out of memory", step);
+    return FAIL(g, st, "point grid: %s: %s", step, sluice_context_error(g->ctx));
 }
 
 sluice_status sr_point_grid_get(const sr_point_grid *g, sr_point_grid_view *view)

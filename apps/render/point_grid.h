@@ -55,11 +55,13 @@ typedef enum sr_point_grid_build_kind {
 #define SR_POINT_GRID_MAX_SLOTS 65536u
 
 /** Cell edge over search radius that sr_point_grid_desc_auto aims at.
- *  Measured with bench_knn (65,000 photons on the Cornell-box walls, count
- *  build, atleast mode, k = 32 .. 500, 2 cores): an edge of 1x the radius
- *  was within a few percent of the best of 0.5x, 0.75x, 1x, 1.5x and 2x for
- *  every k, and finer grids cost more empty cells per shell. */
-#define SR_POINT_GRID_AUTO_EDGE 1.0
+ *  Measured with bench_knn --edge (65,000 photons on Cornell-box surfaces,
+ *  65,536 queries, count build, radius = the mean k-photon radius, 2 cores):
+ *  edges of 0.5, 0.75, 1 and 1.5 radii; 0.75 was best or within about 10%
+ *  of the best for k = 32, 64 and 500 in both modes. Finer cells make
+ *  Purcell's atleast estimate tighter (its first k photons lie nearer) but
+ *  cost more empty cells per shell. */
+#define SR_POINT_GRID_AUTO_EDGE 0.75
 
 /** Most cells sr_point_grid_desc_auto makes: 2^22, and at most
  *  SR_POINT_GRID_AUTO_CELLS_PER_POINT per point (at least 64): past that,

@@ -99,8 +99,7 @@ static inline void pm_scan_cell(pm_state *st, uint c, const pm_knn_params *p, ui
     for (uint j = b; j < b + n; ++j) {
         uint id = order[j];
         global const pm_photon *ph = photons + id;
-        if (p->normal_filter &&
-            !(st->nx * ph->dx + st->ny * ph->dy + st->nz * ph->dz < 0.0f))
+        if (p->normal_filter && !(st->nx * ph->dx + st->ny * ph->dy + st->nz * ph->dz < 0.0f))
             continue;
         float dx = ph->px - st->px, dy = ph->py - st->py, dz = ph->pz - st->pz;
         float d2 = dx * dx + dy * dy + dz * dz;
@@ -139,12 +138,11 @@ __kernel void pm_knn_init(SLUICE_PARAMS, global pm_knn_result *results, global u
 }
 
 /* One shell for every live query (see the top of the file). */
-__kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live,
-                          global const pm_query *queries, global const pm_photon *photons,
-                          global const uint *order, global const uint *cell_start,
-                          global const uint *cell_count, global const uint *cell_arrived,
-                          pg_params g, pm_knn_params p, uint exact, uint base,
-                          global pm_knn_result *results, global float *heap_d2,
+__kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const pm_query *queries,
+                          global const pm_photon *photons, global const uint *order,
+                          global const uint *cell_start, global const uint *cell_count,
+                          global const uint *cell_arrived, pg_params g, pm_knn_params p, uint exact,
+                          uint base, global pm_knn_result *results, global float *heap_d2,
                           global uint *heap_id, global uint *indices)
 {
     SLUICE_FOR_EACH (i) {
@@ -217,8 +215,7 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live,
             }
             if (qc[a] + s < n[a] - 1) {
                 covered = 0;
-                d = fmin(d,
-                         g.lo[a] + (float)(qc[a] + s + 1) * g.cell[a] - qp[a] - p.margin[a]);
+                d = fmin(d, g.lo[a] + (float)(qc[a] + s + 1) * g.cell[a] - qp[a] - p.margin[a]);
             }
         }
         float ds2 = covered ? INFINITY : (d > 0.0f ? d * d : 0.0f);
