@@ -2,7 +2,7 @@
 #   make demo   install what is missing, build, run the demo
 #   make test   install what is missing, build, run the whole suite (ctest)
 #   make bench  install the benchmarks' peers (Embree), run the benchmarks
-#               (bench/results/streams.json, bench/results/raytrace.json)
+#               (bench/results/streams.json, raytrace.json, knn.json, photonmap.json)
 #   make asan   the suite again in an ASan+UBSan build of the host code
 BUILD ?= build
 ASAN_BUILD ?= build-asan
@@ -35,6 +35,8 @@ bench:
 	ninja -C $(BUILD)
 	$(BUILD)/bench/bench_streams --out bench/results/streams.json
 	$(BUILD)/bench/bench_raytrace --out bench/results/raytrace.json
+	$(BUILD)/bench/bench_knn --out bench/results/knn.json
+	python3 bench/bench_photonmap.py --exe $(BUILD)/apps/photonmap/sluice-photonmap --out bench/results/photonmap.json
 
 $(ASAN_BUILD)/build.ninja: | deps
 	meson setup $(ASAN_BUILD) -Dbuildtype=debug -Db_sanitize=address,undefined \

@@ -1,5 +1,5 @@
 /*
- * bench_grid: the ray tracer's uniform grid build (apps/raytrace/grid.h),
+ * bench_grid: the ray tracer's uniform grid build (apps/render/grid.h),
  * on the device (kernels, scan, radix sort, cell index) against the plain C
  * build, measured in one run on the same scenes, with the grid's memory.
  * The device result is checked against the C one, element by element; the

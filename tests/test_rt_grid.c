@@ -1,4 +1,4 @@
-/* Tests of the ray tracer's uniform grid (apps/raytrace/grid.h; Purcell 3.2,
+/* Tests of the ray tracer's uniform grid (apps/render/grid.h; Purcell 3.2,
  * 5.2.1): the choice of resolution, the C build against a brute-force
  * reference (every triangle against every voxel) and against point samples
  * of the triangles (no voxel a triangle passes through may miss it), and the

@@ -177,6 +177,38 @@ sluice_status pm_renderer_create(sluice_context *ctx, const sr_scene *scene, con
     return SLUICE_OK;
 }
 
+/* The bounds of the stored photons (the scene's when there are none). */
+static sluice_status photon_bounds(pm_renderer *r, const sr_scene_stats *ss, float lo[3],
+                                   float hi[3])
+{
+    memcpy(lo, ss->bounds_min, 3 * sizeof(float));
+    memcpy(hi, ss->bounds_max, 3 * sizeof(float));
+    if (r->map_count == 0)
+        return SLUICE_OK;
+    pm_photon *ph = malloc(r->map_count * sizeof *ph);
+    if (!ph)
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    sluice_status st = sluice_stream_download(r->map, ph, r->map_count, NULL);
+    float a[3] = {INFINITY, INFINITY, INFINITY}, b[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; st == SLUICE_OK && i < r->map_count; ++i) {
+        const float p[3] = {ph[i].px, ph[i].py, ph[i].pz};
+        for (int k = 0; k < 3; ++k)
+            if (isfinite(p[k])) {
+                a[k] = fminf(a[k], p[k]);
+                b[k] = fmaxf(b[k], p[k]);
+            }
+    }
+    free(ph);
+    for (int k = 0; st == SLUICE_OK && k < 3; ++k)
+        if (a[k] <= b[k]) {
+            lo[k] = fmaxf(a[k], lo[k]);
+            hi[k] = fminf(b[k], hi[k]);
+            if (lo[k] > hi[k])
+                lo[k] = hi[k] = 0.5f * (a[k] + b[k]);
+        }
+    return st;
+}
+
 sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
 {
     if (!r)
@@ -215,9 +247,17 @@ sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
     if (r->opt.grid_dims[0])
         st = sr_point_grid_desc_dims(ss->bounds_min, ss->bounds_max, r->opt.grid_dims,
                                      &r->stats.map_grid, msg, sizeof msg);
-    else
-        st = sr_point_grid_desc_auto(ss->bounds_min, ss->bounds_max, n, expected / 4.0f,
-                                     &r->stats.map_grid, msg, sizeof msg);
+    else {
+        /* the photons' own box: photons lie on the surfaces that store them
+         * (glassball's and ring's floors: a flat box, one cell high) */
+        float lo[3], hi[3];
+        st = photon_bounds(r, ss, lo, hi);
+        if (st == SLUICE_OK)
+            st = sr_point_grid_desc_auto(lo, hi, n, expected / 4.0f, &r->stats.map_grid, msg,
+                                         sizeof msg);
+        else
+            snprintf(msg, sizeof msg, "reading the photons: %s", sluice_context_error(r->ctx));
+    }
     if (st != SLUICE_OK) {
         sr_set_error(err, err_size, "photon map grid: %s", msg);
         return st;

@@ -12,7 +12,8 @@
  * powers by the number of photons emitted (pm_photon_map), so the map holds
  * flux per photon, Phi / N (Jensen 2001, ch. 5).
  *
- * Photons are stored only after at least one bounce: direct light is
+ * Photons are stored at diffuse and glossy surfaces (not on emitters, which
+ * the shading lights by their emission) and only after at least one bounce: direct light is
  * computed with shadow rays (Purcell 6.2.4), so the map holds indirect light
  * and caustics, and direct light is not counted twice.
  *
@@ -92,7 +93,7 @@ __kernel void pm_bounce(SLUICE_PARAMS, global const rt_ray *rays, global const r
             bad = !(isfinite(w.x) && isfinite(w.y) && isfinite(w.z));
             /* stored where the estimate reads it: diffuse and glossy surfaces,
              * after at least one bounce (direct light has shadow rays) */
-            store = !specular && depth >= 1u && !bad;
+            store = (kind == 0u || kind == 3u) && depth >= 1u && !bad; /* not on lights */
             float cos_i = dot(s.n, wo);
             float3 refl = d + s.n * (2.0f * cos_i);
             if (!specular) {

@@ -1,4 +1,4 @@
-/* The uniform grid build on the device (apps/raytrace/grid_device.c; Purcell
+/* The uniform grid build on the device (apps/render/grid_device.c; Purcell
  * 3.2 and 5.2.1). sr_program_create prepends tri_box.h, which holds the
  * overlap test shared with the C build: the two builds make the same
  * decisions bit for bit.

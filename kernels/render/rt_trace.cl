@@ -12,7 +12,7 @@
  * kernel (and the plain C references in the tests and the benchmark) rounds
  * the same way. The Moller-Trumbore test does use fused multiply-adds, but
  * written out with fma() at fixed places (rt_cross, rt_dot here, the same
- * order in rt_lanes.cl and in apps/raytrace/mt_ref.h), so the rounding is
+ * order in rt_lanes.cl and in apps/render/mt_ref.h), so the rounding is
  * still the same everywhere: 12 of its 27 multiplies fold into an add, which
  * made the fused mode 7% (cornell) and 20% (bunny) faster (512x512 primary
  * rays, one process) and rounds once where it rounded twice.

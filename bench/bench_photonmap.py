@@ -1,0 +1,92 @@
+#!/usr/bin/env python3
+"""Purcell's Table 6.1 side by side: his three scenes at his settings (image
+size, photons, k, grid, light samples) rendered by sluice-photonmap with each
+photon-map build, each phase beside his GeForce FX 5900 Ultra times.
+
+  bench/bench_photonmap.py [--exe build/apps/photonmap/sluice-photonmap]
+                           [--out bench/results/photonmap.json] [--quick]
+
+Writes JSON naming the CPU; prints a table. Times are host wall times of one
+run per configuration (the first render also builds the kernels, so each
+configuration runs once to warm PoCL's cache, then is timed)."""
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+
+# Purcell 2004, Table 6.1 (seconds): bitonic / stencil totals, and his settings
+PURCELL = {
+    "glassball": {"size": "512x384", "photons": 5000, "k": 32, "grid": "250x1x250",
+                  "light_samples": 4, "bitonic": 17.4, "stencil": 11.3},
+    "ring": {"size": "512x384", "photons": 16000, "k": 64, "grid": "250x1x250",
+             "light_samples": 1, "bitonic": 9.0, "stencil": 8.1},
+    "cornell": {"size": "512x512", "photons": 65000, "k": 500, "grid": "25x25x50",
+                "light_samples": 32, "bitonic": 64.3, "stencil": 47.2},
+}
+
+
+def cpu_name():
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    name = line.split(":", 1)[1].strip()
+                    flags = open("/proc/cpuinfo").read()
+                    return name + (" (AVX-512)" if "avx512f" in flags else " (AVX2, no AVX-512)")
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def run(exe, scene, s, build, quick, tmp):
+    stats = os.path.join(tmp, "s.json")
+    size = "128x96" if quick else s["size"]
+    cmd = [exe, "--scene", scene, "--size", size, "--photons", str(s["photons"]),
+           "--k", str(s["k"]), "--grid", s["grid"], "--light-samples", str(s["light_samples"]),
+           "--map", build, "--out", os.path.join(tmp, "img.png"), "--stats", stats, "--quiet",
+           "--no-profile"]
+    subprocess.run(cmd, check=True)
+    with open(stats) as f:
+        return json.load(f)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--exe", default="build/apps/photonmap/sluice-photonmap")
+    ap.add_argument("--out", default="bench/results/photonmap.json")
+    ap.add_argument("--quick", action="store_true", help="small images, for the smoke test")
+    a = ap.parse_args()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for scene, s in PURCELL.items():
+            for build in ("bitonic", "stencil", "count"):
+                run(a.exe, scene, s, build, True, tmp)  # warm the kernel cache
+                r = run(a.exe, scene, s, build, a.quick, tmp)
+                ph = r["phases"]
+                row = {"scene": scene, "build": build, "size": s["size"] if not a.quick else "128x96",
+                       "photons": s["photons"], "k": s["k"], "grid": s["grid"],
+                       "light_samples": s["light_samples"], "phases_s": ph,
+                       "stored": r["photons"]["stored"], "emitted": r["photons"]["emitted"],
+                       "mean_photons": r["estimates"]["mean_photons"],
+                       "stencil_overflow": r["map_grid"]["overflow_points"]}
+                if build in s:
+                    row["purcell_total_s"] = s[build]
+                    row["speedup"] = s[build] / ph["total"]
+                rows.append(row)
+                print("%-9s %-7s trace photons %6.3f  build %6.3f  trace rays %6.3f  estimate "
+                      "%6.3f  total %6.3f s%s" % (scene, build, ph["trace_photons"], ph["build_map"],
+                                                  ph["trace_rays"], ph["radiance_estimate"],
+                                                  ph["total"],
+                                                  "  Purcell %5.1f s: %.0fx" % (s[build], row["speedup"])
+                                                  if build in s else ""))
+    res = {"cpu": cpu_name(), "command": " ".join(sys.argv), "quick": a.quick, "results": rows}
+    with open(a.out, "w") as f:
+        json.dump(res, f, indent=1)
+        f.write("\n")
+
+
+if __name__ == "__main__":
+    main()
