@@ -281,15 +281,10 @@ int main(int argc, char **argv)
         return rc < 0 ? 0 : rc;
     const sr_cli_common *cc = &c.common;
     char err[1024] = "";
-    sr_scene_load_options lo;
-    memset(&lo, 0, sizeof lo);
-    lo.flags = SR_SCENE_DEFAULT_LIGHT;
     sr_scene *scene = NULL;
-    sluice_status st = sr_scene_load(cc->scene, &lo, &scene, err, sizeof err);
-    if (st != SLUICE_OK) {
-        fprintf(stderr, PROG ": --scene %s: %s\n", cc->scene, err);
+    if (sr_cli_load_scene(PROG, cc, &scene))
         return 1;
-    }
+    sluice_status st = SLUICE_OK;
     const sr_render_settings *rs = sr_scene_render_settings(scene);
     const sr_camera *cam = sr_scene_camera(scene);
     pm_options *o = &c.opt;
@@ -308,18 +303,11 @@ int main(int argc, char **argv)
     if (cc->time_limit > 0 && !c.have_spp)
         spp = 1u << 20;
 
-    sluice_context_options co;
-    memset(&co, 0, sizeof co);
-    co.device = cc->device;
-    co.profile = cc->profile;
     sluice_context *ctx = NULL;
     pm_renderer *r = NULL;
     int exit_code = 1;
-    st = sluice_context_create(&co, &ctx, err, sizeof err);
-    if (st != SLUICE_OK) {
-        fprintf(stderr, PROG ": OpenCL: %s\n", err);
+    if (sr_cli_context(PROG, cc, &ctx))
         goto done;
-    }
     st = pm_renderer_create(ctx, scene, o, &r, err, sizeof err);
     if (st != SLUICE_OK) {
         fprintf(stderr, PROG ": %s\n", err);

@@ -165,3 +165,30 @@ void sr_cli_common_usage(FILE *out)
           "  --help                   this text\n",
           out);
 }
+
+int sr_cli_load_scene(const char *prog, const sr_cli_common *c, sr_scene **out)
+{
+    char err[1024] = "";
+    sr_scene_load_options lo;
+    memset(&lo, 0, sizeof lo);
+    lo.flags = SR_SCENE_DEFAULT_LIGHT;
+    if (sr_scene_load(c->scene, &lo, out, err, sizeof err) != SLUICE_OK) {
+        fprintf(stderr, "%s: --scene %s: %s\n", prog, c->scene, err);
+        return 1;
+    }
+    return 0;
+}
+
+int sr_cli_context(const char *prog, const sr_cli_common *c, sluice_context **out)
+{
+    char err[1024] = "";
+    sluice_context_options co;
+    memset(&co, 0, sizeof co);
+    co.device = c->device;
+    co.profile = c->profile;
+    if (sluice_context_create(&co, out, err, sizeof err) != SLUICE_OK) {
+        fprintf(stderr, "%s: OpenCL: %s\n", prog, err);
+        return 1;
+    }
+    return 0;
+}

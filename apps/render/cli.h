@@ -8,6 +8,9 @@
 #ifndef SR_CLI_H
 #define SR_CLI_H
 
+#include "scene.h"
+#include "sluice/sluice.h"
+
 #include <stdio.h>
 
 /** The options common to the renderers. */
@@ -39,6 +42,15 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
 /** Checks what can only be checked once all options are read (the output's
  *  extension). 0 when fine, 2 after printing a message. */
 int sr_cli_common_finish(const char *prog, const sr_cli_common *c);
+
+/** Loads c->scene (a built-in name or a file; a default light is added to a
+ *  scene without one). 0 on success, else 1 after printing
+ *  "PROG: --scene NAME: why". */
+int sr_cli_load_scene(const char *prog, const sr_cli_common *c, sr_scene **out);
+
+/** Creates the OpenCL context for --device and --no-profile. 0 on success,
+ *  else 1 after printing "PROG: OpenCL: why". */
+int sr_cli_context(const char *prog, const sr_cli_common *c, sluice_context **out);
 
 /** Prints the common options' lines of --help. */
 void sr_cli_common_usage(FILE *out);
