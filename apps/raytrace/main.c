@@ -65,7 +65,7 @@ typedef struct cli {
     int have_spp, have_ls, have_depth;
 } cli;
 
-static const char *const mode_names[] = {"cast", "shadow", "whitted", "path"};
+static const char *const mode_names[] = {"cast", "shadow", "whitted", "path", NULL};
 
 static int parse(int argc, char **argv, cli *c)
 {
