@@ -66,10 +66,10 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
 
 /* One bounce of every photon of the stream: store, bounce or drop. */
 __kernel void pm_bounce(SLUICE_PARAMS, global const rt_ray *rays, global const rt_hit *hits,
-                        global pm_photon *stored, global rt_ray *bounced,
-                        global const float *tv, global const uint *indices,
-                        global const float *normals, global const uint *tri_mat,
-                        global const rt_material *mats, uint max_depth, float scene_eps)
+                        global pm_photon *stored, global rt_ray *bounced, global const float *tv,
+                        global const uint *indices, global const float *normals,
+                        global const uint *tri_mat, global const rt_material *mats, uint max_depth,
+                        float scene_eps)
 {
     SLUICE_FOR_EACH (i) {
         rt_ray ray = rays[i];

@@ -37,8 +37,8 @@ __kernel void pm_gather_add(SLUICE_PARAMS, global const rt_gather *g,
         SLUICE_COUNT(0, some);
         SLUICE_COUNT(1, !some);
         if (some) {
-            float3 c = (float3)(p.wr, p.wg, p.wb) * (float3)(r.sr, r.sg, r.sb) *
-                       (1.0f / (RT_PI * r.r2));
+            float3 c =
+                (float3)(p.wr, p.wg, p.wb) * (float3)(r.sr, r.sg, r.sb) * (1.0f / (RT_PI * r.r2));
             SLUICE_COUNT(2, rt_add(accum, p.pixel, c));
         }
     }

@@ -73,11 +73,11 @@ typedef struct pm_knn_params {
 
 /** What pm_emit (pm_photon.cl) needs besides buffers (by value). */
 typedef struct pm_emit_args {
-    rt_u32 seed, base;   /* key seed, index of the first photon of this batch */
-    rt_u32 area_lights;  /* emissive triangles */
+    rt_u32 seed, base;  /* key seed, index of the first photon of this batch */
+    rt_u32 area_lights; /* emissive triangles */
     rt_u32 point_lights;
-    float area_prob;     /* probability of leaving an area light */
-    float area_total;    /* total emissive area */
+    float area_prob;  /* probability of leaving an area light */
+    float area_total; /* total emissive area */
     float scene_eps;
     rt_u32 pad;
 } pm_emit_args;

@@ -81,8 +81,8 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
             float u0 = rt_rand(ray.key, 16u + 3u * k), u1 = rt_rand(ray.key, 17u + 3u * k),
                   u2 = rt_rand(ray.key, 18u + 3u * k);
             float3 q, ln;
-            uint lt = rt_area_light_sample(u0, u1, u2, f.area_lights, area_tris, area_cdf, tv, &q,
-                                           &ln);
+            uint lt =
+                rt_area_light_sample(u0, u1, u2, f.area_lights, area_tris, area_cdf, tv, &q, &ln);
             rt_material lm = mats[tri_mat[lt]];
             float3 L = q - s.p;
             float d2 = dot(L, L), dist = sqrt(d2);

@@ -130,8 +130,7 @@ inline float3 rt_cosine_dir(float3 n, float r1, float r2)
     float3 t1 = (float3)(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
     float3 t2 = (float3)(b, sign + n.y * n.y * a, -n.y);
     float phi = 2.0f * RT_PI * r1, sr = sqrt(r2);
-    return normalize(t1 * (cos(phi) * sr) + t2 * (sin(phi) * sr) +
-                     n * sqrt(fmax(0.0f, 1.0f - r2)));
+    return normalize(t1 * (cos(phi) * sr) + t2 * (sin(phi) * sr) + n * sqrt(fmax(0.0f, 1.0f - r2)));
 }
 
 #endif
