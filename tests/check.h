@@ -8,6 +8,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/wait.h>
 
 static int check_passed_, check_failed_;
 
@@ -30,6 +31,27 @@ static int check_passed_, check_failed_;
         CHECK(st_ == SLUICE_OK, "%s -> %s: %s", #call, sluice_status_string(st_),                  \
               sluice_context_error(ctx));                                                          \
     } while (0)
+
+/* Runs the shell command `cmd` with stderr joined to stdout, keeps the first
+ * out_size - 1 bytes of its output in `out` (NUL-terminated) and returns its
+ * exit status (128 + signal when killed, -1 when it could not run). For the
+ * tests of the command-line tools. */
+static inline int check_run(const char *cmd, char *out, size_t out_size)
+{
+    char full[4096];
+    snprintf(full, sizeof full, "%s 2>&1", cmd);
+    FILE *p = popen(full, "r");
+    if (!p)
+        return -1;
+    size_t n = fread(out, 1, out_size - 1, p);
+    out[n] = '\0';
+    while (fgetc(p) != EOF) {
+    }
+    int st = pclose(p);
+    if (WIFEXITED(st))
+        return WEXITSTATUS(st);
+    return WIFSIGNALED(st) ? 128 + WTERMSIG(st) : -1;
+}
 
 static inline int check_summary(void)
 {

@@ -238,21 +238,6 @@ static void test_furnace(void)
     sr_scene_destroy(scene);
 }
 
-static int run(const char *cmd, char *out, size_t out_size)
-{
-    char full[2100];
-    snprintf(full, sizeof full, "%s 2>&1", cmd);
-    FILE *p = popen(full, "r");
-    if (!p)
-        return -1;
-    size_t n = fread(out, 1, out_size - 1, p);
-    out[n] = '\0';
-    while (fgetc(p) != EOF) {
-    }
-    int st = pclose(p);
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
-
 static void test_cli(const char *exe)
 {
     char out[8192], cmd[2048];
@@ -274,18 +259,18 @@ static void test_cli(const char *exe)
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; ++i) {
         snprintf(cmd, sizeof cmd, "%s %s", exe, bad[i].args);
-        int rc = run(cmd, out, sizeof out);
+        int rc = check_run(cmd, out, sizeof out);
         CHECK(rc != 0 && strstr(out, bad[i].expect), "'%s': exit %d, said: %s", bad[i].args, rc,
               out);
     }
     snprintf(cmd, sizeof cmd, "%s --help", exe);
-    CHECK(run(cmd, out, sizeof out) == 0 && strstr(out, "--map") && strstr(out, "examples"),
+    CHECK(check_run(cmd, out, sizeof out) == 0 && strstr(out, "--map") && strstr(out, "examples"),
           "--help");
     snprintf(cmd, sizeof cmd,
              "%s --scene glassball --size 64x48 --photons 2000 --map bitonic --out pm_cli.png "
              "--stats pm_cli.json --quiet",
              exe);
-    CHECK(run(cmd, out, sizeof out) == 0, "glassball render: %s", out);
+    CHECK(check_run(cmd, out, sizeof out) == 0, "glassball render: %s", out);
     FILE *f = fopen("pm_cli.json", "r");
     size_t n = f ? fread(out, 1, sizeof out - 1, f) : 0;
     out[n] = '\0';

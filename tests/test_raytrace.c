@@ -785,23 +785,6 @@ static void test_camera_inside(void)
 
 /* Runs `cmd` through the shell; returns the exit status (128 + signal for a
  * signal) and the first part of its stderr in `out`. */
-static int run(const char *cmd, char *out, size_t out_size)
-{
-    char full[2048];
-    snprintf(full, sizeof full, "%s 2>&1", cmd);
-    FILE *p = popen(full, "r");
-    if (!p)
-        return -1;
-    size_t n = fread(out, 1, out_size - 1, p);
-    out[n] = '\0';
-    while (fgetc(p) != EOF) {
-    }
-    int st = pclose(p);
-    if (WIFEXITED(st))
-        return WEXITSTATUS(st);
-    return WIFSIGNALED(st) ? 128 + WTERMSIG(st) : -1;
-}
-
 static void test_cli(const char *exe)
 {
     char out[8192], cmd[2048];
@@ -827,19 +810,19 @@ static void test_cli(const char *exe)
         snprintf(cmd, sizeof cmd, "%s %s --out cli_bad.png", exe, bad[i].args);
         if (strstr(bad[i].args, "--out"))
             snprintf(cmd, sizeof cmd, "%s %s", exe, bad[i].args);
-        int rc = run(cmd, out, sizeof out);
+        int rc = check_run(cmd, out, sizeof out);
         CHECK(rc != 0 && rc < 128, "%s: exit %d", bad[i].args, rc);
         CHECK(strstr(out, bad[i].expect) != NULL, "%s: message does not name %s: %s", bad[i].args,
               bad[i].expect, out);
     }
     snprintf(cmd, sizeof cmd, "%s --help", exe);
-    CHECK(run(cmd, out, sizeof out) == 0 && strstr(out, "examples"), "--help");
+    CHECK(check_run(cmd, out, sizeof out) == 0 && strstr(out, "examples"), "--help");
 
     snprintf(cmd, sizeof cmd,
              "%s --scene cornell --mode shadow --size 32x24 --exec fused --out cli_ok.exr "
              "--stats cli_ok.json --quiet",
              exe);
-    CHECK(run(cmd, out, sizeof out) == 0, "render: %s", out);
+    CHECK(check_run(cmd, out, sizeof out) == 0, "render: %s", out);
     FILE *f = fopen("cli_ok.json", "r");
     CHECK(f != NULL, "no stats file");
     if (f) {
@@ -860,7 +843,7 @@ static void test_cli(const char *exe)
              "%s --scene cornell --mode path --size 64x64 --spp 100000 --out cli_int.exr --quiet "
              "--progress & pid=$!; sleep 4; kill -INT $pid; wait $pid",
              exe);
-    int rc = run(cmd, out, sizeof out);
+    int rc = check_run(cmd, out, sizeof out);
     CHECK(rc == 130, "SIGINT: exit %d: %s", rc, out);
     CHECK(sr_image_read("cli_int.exr", &img, err, sizeof err) == SLUICE_OK,
           "no image after SIGINT: %s", err);
