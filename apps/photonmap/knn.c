@@ -1,6 +1,10 @@
 /* The kNN-grid search (knn.h; Purcell 6.2.3), kernels in
  * kernels/photonmap/pm_knn.cl. Per batch of queries:
  *
+ *   pm_knn_gather  (once per call) the photons copied in cell order, power
+ *                  redistribution applied, so a cell is one contiguous run
+ *   pm_knn_sat_*   (once per call) the summed-count table over the cells,
+ *                  with which a pass jumps over shells without photons
  *   pm_knn_init    results zeroed, live = the batch's ids
  *   loop           while the live stream is not empty (sluice_loop watching
  *                  its length: Purcell's occlusion query, 6.3.3):
@@ -15,6 +19,7 @@
 
 #include "app_error.h"
 #include "kernels.h"
+#include "sluice/streams.h"
 
 #include "../../kernels/render/pg_types.h"
 
@@ -28,11 +33,10 @@
 enum {
     PASS_LIVE,
     PASS_QUERIES,
-    PASS_PHOTONS,
-    PASS_ORDER,
-    PASS_START,
+    PASS_MAP,
+    PASS_MAP_START,
     PASS_COUNT,
-    PASS_ARRIVED,
+    PASS_SAT,
     PASS_GRID,
     PASS_PARAMS,
     PASS_EXACT,
@@ -46,10 +50,12 @@ enum {
 struct pm_knn {
     sluice_context *ctx;
     sluice_program *prog;
-    sluice_kernel *k_init, *k_pass, *k_live;
+    sluice_kernel *k_gather, *k_sat[3], *k_init, *k_pass, *k_live;
     sluice_loop *loop;
     /* scratch kept between calls; streams only grow */
     sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
+    sluice_stream *map, *map_start; /* the cell-ordered copy of the photons */
+    sluice_stream *sat;             /* summed counts: skips shells without photons */
     char message[512];
 };
 
@@ -93,6 +99,9 @@ void pm_knn_destroy(pm_knn *knn)
     if (!knn)
         return;
     sluice_loop_destroy(knn->loop);
+    sluice_kernel_destroy(knn->k_gather);
+    for (int a = 0; a < 3; ++a)
+        sluice_kernel_destroy(knn->k_sat[a]);
     sluice_kernel_destroy(knn->k_init);
     sluice_kernel_destroy(knn->k_pass);
     sluice_kernel_destroy(knn->k_live);
@@ -102,6 +111,9 @@ void pm_knn_destroy(pm_knn *knn)
     sluice_stream_destroy(knn->heap_d2);
     sluice_stream_destroy(knn->heap_id);
     sluice_stream_destroy(knn->dummy);
+    sluice_stream_destroy(knn->map);
+    sluice_stream_destroy(knn->map_start);
+    sluice_stream_destroy(knn->sat);
     free(knn);
 }
 
@@ -119,6 +131,11 @@ sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out)
     sluice_status st = sr_program_create(
         ctx, (const char *[]){"rt_types.h", "pg_types.h", "pm_types.h", "pm_knn.cl"}, 4, NULL,
         &knn->prog);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_gather", &knn->k_gather);
+    static const char *const sat_names[3] = {"pm_knn_sat_x", "pm_knn_sat_y", "pm_knn_sat_z"};
+    for (int a = 0; st == SLUICE_OK && a < 3; ++a)
+        st = sluice_kernel_create(knn->prog, sat_names[a], &knn->k_sat[a]);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(knn->prog, "pm_knn_init", &knn->k_init);
     if (st == SLUICE_OK)
@@ -256,9 +273,6 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st != SLUICE_OK)
         return st;
 
-    pg_params g;
-    pm_knn_params p;
-    params_make(&v, o, indices ? cap : 0u, &g, &p);
     uint32_t exact = o->mode == PM_KNN_EXACT;
     size_t batch = n ? n : 1;
     if (exact) {
@@ -280,21 +294,66 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st != SLUICE_OK)
         goto runtime_fail;
 
+    step = "copying the map in cell order";
+    sr_point_grid_stats gs;
+    st = sr_point_grid_statistics(grid, &gs);
+    if (st == SLUICE_OK)
+        st = ensure(knn->ctx, &knn->map, sizeof(pm_photon), gs.stored);
+    /* cells back to back in cell order, so that a run of cells along x is
+     * one run of photons (the stencil build's footprints have gaps, and the
+     * bitonic build's starts of empty cells are not needed to be in order) */
+    sluice_stream *map_start = knn->map_start;
+    if (st == SLUICE_OK)
+        st = ensure(knn->ctx, &knn->map_start, 4, v.cells);
+    if (st == SLUICE_OK) {
+        map_start = knn->map_start;
+        st = sluice_scan(knn->ctx, v.cell_count, map_start, SLUICE_U32, 0, NULL);
+    }
+    sluice_stream *gather_in[] = {v.order,   v.cell_start, v.cell_count, v.cell_arrived,
+                                  map_start, photons,      knn->map};
+    for (unsigned i = 0; st == SLUICE_OK && i < 7; ++i)
+        st = sluice_kernel_set_stream(knn->k_gather, i, gather_in[i], 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(knn->k_gather, v.cells);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(knn->map, gs.stored);
+    if (st != SLUICE_OK)
+        goto runtime_fail;
+
+    step = "summing the cell counts";
+    pg_params g;
+    pm_knn_params p;
+    params_make(&v, o, indices ? cap : 0u, &g, &p);
+    st = ensure(knn->ctx, &knn->sat, 4, v.cells);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_sat[0], 0, v.cell_count, 0);
+    for (int a = 0; st == SLUICE_OK && a < 3; ++a) {
+        sluice_kernel *ks = knn->k_sat[a];
+        unsigned first = a == 0 ? 1u : 0u;
+        /* lines across the axis: the product of the other two sides */
+        size_t lines = (size_t)v.cells / g.dims[a];
+        st = sluice_kernel_set_arg(ks, first, sizeof g, &g);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_stream(ks, first + 1, knn->sat, 0);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_launch_count(ks, lines);
+    }
+    if (st != SLUICE_OK)
+        goto runtime_fail;
+
     step = "binding the kernels";
     sluice_kernel *k = knn->k_pass;
     st = sluice_kernel_set_input(k, PASS_LIVE, knn->live);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, PASS_QUERIES, queries, 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, PASS_PHOTONS, photons, 0);
+        st = sluice_kernel_set_stream(k, PASS_MAP, knn->map, 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, PASS_ORDER, v.order, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, PASS_START, v.cell_start, 0);
+        st = sluice_kernel_set_stream(k, PASS_MAP_START, map_start, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, PASS_COUNT, v.cell_count, 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, PASS_ARRIVED, v.cell_arrived, 0);
+        st = sluice_kernel_set_stream(k, PASS_SAT, knn->sat, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(k, PASS_GRID, sizeof g, &g);
     if (st == SLUICE_OK)

@@ -289,8 +289,15 @@ static sluice_status gather(void *user, sluice_stream *points, size_t n)
     pm_renderer *r = user;
     if (r->map_count == 0)
         return SLUICE_OK;
+    /* the tracing queued before the hook is the tracing phase's: wait for it
+     * so that the estimate's clock does not count it */
+    sluice_status st = sluice_context_finish(r->ctx);
+    if (st != SLUICE_OK) {
+        sr_set_error(r->err, r->err_size, "tracing: %s", sluice_context_error(r->ctx));
+        r->gather_status = st;
+        return st;
+    }
     double t0 = sr_clock_seconds();
-    sluice_status st = SLUICE_OK;
     if (sluice_stream_capacity(r->queries) < n)
         st = sluice_stream_grow(r->queries, n);
     if (st == SLUICE_OK && sluice_stream_capacity(r->results) < n)

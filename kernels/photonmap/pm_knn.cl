@@ -2,11 +2,15 @@
  * sr_program_create prepends rt_types.h, pg_types.h (the point grid's cell
  * function, shared with its build) and pm_types.h.
  *
- * One pass = pm_knn_pass over the live query ids, each exploring one more
- * shell of cells (the cells at Chebyshev distance `shells` from the query's
- * cell) and deciding whether it is done, then pm_knn_live, which emits the
- * ids still searching into the next live stream. The heavy work is in a
- * kernel without conditional outputs, since an emitting body runs twice. */
+ * Per call, pm_knn_gather copies the photons in cell order (a row of cells
+ * along x is then one run of photons) and pm_knn_sat_* sum the cell counts
+ * (any box of cells is counted with eight reads). One pass = pm_knn_pass
+ * over the live query ids, each exploring one more shell of cells (the
+ * cells at Chebyshev distance `shells` from the query's cell; shells and
+ * faces without photons are jumped over by the counts) and deciding whether
+ * it is done, then pm_knn_live, which emits the ids still searching into the
+ * next live stream. The heavy work is in a kernel without conditional
+ * outputs, since an emitting body runs twice. */
 #include "sluice.cl"
 
 /* Squared distance from x to the slab of cell j of an axis of n cells,
@@ -29,13 +33,76 @@ static inline float pm_gap2(float x, int j, int n, float lo, float cell, float m
     return gap > 0.0f ? gap * gap : 0.0f;
 }
 
+/* Narrows the cells [*a, *b] of an axis to those whose slab may lie within
+ * sqrt(t) of x: by the cell function, widened by a cell each way so that its
+ * rounding never drops a cell that pm_gap2 would keep. */
+static inline void pm_trim(float x, float t, float lo, float inv_cell, uint n, float margin, int *a,
+                           int *b)
+{
+    float reach = sqrt(t) + margin;
+    *a = max(*a, (int)pg_axis(x - reach, lo, inv_cell, n) - 1);
+    *b = min(*b, (int)pg_axis(x + reach, lo, inv_cell, n) + 1);
+}
+
+/* The summed count at cell (x, y, z): the photons of the cells [0, x] x
+ * [0, y] x [0, z] (pm_knn_sat_*); 0 below the grid. */
+static inline uint pm_sat_at(global const uint *sat, const int *n, int x, int y, int z)
+{
+    if (x < 0 || y < 0 || z < 0)
+        return 0u;
+    return sat[(uint)x + (uint)n[0] * ((uint)y + (uint)n[1] * (uint)z)];
+}
+
+/* Photons in the cells [x0, x1] x [y0, y1] x [z0, z1] (inclusive) by
+ * inclusion-exclusion; unsigned wrap-around keeps it exact. */
+static inline uint pm_box(global const uint *sat, const int *n, int x0, int x1, int y0, int y1,
+                          int z0, int z1)
+{
+    --x0;
+    --y0;
+    --z0;
+    return pm_sat_at(sat, n, x1, y1, z1) - pm_sat_at(sat, n, x0, y1, z1) -
+           pm_sat_at(sat, n, x1, y0, z1) - pm_sat_at(sat, n, x1, y1, z0) +
+           pm_sat_at(sat, n, x0, y0, z1) + pm_sat_at(sat, n, x0, y1, z0) +
+           pm_sat_at(sat, n, x1, y0, z0) - pm_sat_at(sat, n, x0, y0, z0);
+}
+
+/* Photons in the cube of cells [qc - s, qc + s], clipped to the grid. */
+static inline uint pm_cube_count(global const uint *sat, const int *qc, int s, const int *n)
+{
+    return pm_box(sat, n, max(qc[0] - s, 0), min(qc[0] + s, n[0] - 1), max(qc[1] - s, 0),
+                  min(qc[1] + s, n[1] - 1), max(qc[2] - s, 0), min(qc[2] + s, n[2] - 1));
+}
+
+/* The explored cube [qc - s, qc + s]: the square of its inscribed radius d_s
+ * (shrunk by the margin), and whether it covers the grid (a side on the
+ * grid's boundary is infinitely far: nothing lies beyond it; then d_s is
+ * infinite). */
+static inline float pm_cube_d2(const float *qp, const int *qc, int s, const int *n,
+                               const pg_params *g, const pm_knn_params *p, int *covered)
+{
+    float d = INFINITY;
+    *covered = 1;
+    for (int a = 0; a < 3; ++a) {
+        if (qc[a] - s > 0) {
+            *covered = 0;
+            d = fmin(d, qp[a] - (g->lo[a] + (float)(qc[a] - s) * g->cell[a]) - p->margin[a]);
+        }
+        if (qc[a] + s < n[a] - 1) {
+            *covered = 0;
+            d = fmin(d, g->lo[a] + (float)(qc[a] + s + 1) * g->cell[a] - qp[a] - p->margin[a]);
+        }
+    }
+    return *covered ? INFINITY : (d > 0.0f ? d * d : 0.0f);
+}
+
 /* A query's running estimate while it is in a kernel. */
 typedef struct pm_state {
     float px, py, pz, nx, ny, nz;
     float sr, sg, sb, r2;
     uint count, flags, q;
     global float *hd; /* exact: heap of squared distances (max at 0) */
-    global uint *hi;  /* exact: heap of photon ids */
+    global uint *hi;  /* exact: heap of places in the cell-ordered map */
 } pm_state;
 
 /* The squared distance beyond which nothing can enter the estimate now. */
@@ -84,45 +151,102 @@ static inline void pm_heap_add(pm_state *st, uint k, float d2, uint id)
     hi[j] = id;
 }
 
-/* Examines the photons of cell c (Purcell Fig. 6.6). */
-static inline void pm_scan_cell(pm_state *st, uint c, const pm_knn_params *p, uint exact,
-                                global const pm_photon *photons, global const uint *order,
-                                global const uint *cell_start, global const uint *cell_count,
-                                global const uint *cell_arrived, global uint *indices)
+/* Examines the photons map[b .. e) (Purcell Fig. 6.6): in the cell-ordered
+ * copy of the map (pm_knn_gather) a run of cells along x is one contiguous
+ * run of photons, examined in the order of their cells. */
+static inline void pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params *p, uint exact,
+                               global const pm_photon *map, global uint *indices)
 {
-    uint b = cell_start[c], n = cell_count[c];
-    if (n == 0u)
-        return;
-    /* Purcell's power redistribution: exactly 1 unless the stencil build
-     * dropped photons of this cell. */
-    float scale = (float)cell_arrived[c] / (float)n;
-    for (uint j = b; j < b + n; ++j) {
-        uint id = order[j];
-        global const pm_photon *ph = photons + id;
-        if (p->normal_filter && !(st->nx * ph->dx + st->ny * ph->dy + st->nz * ph->dz < 0.0f))
-            continue;
+    for (uint j = b; j < e; ++j) {
+        global const pm_photon *ph = map + j;
         float dx = ph->px - st->px, dy = ph->py - st->py, dz = ph->pz - st->pz;
         float d2 = dx * dx + dy * dy + dz * dz;
         if (!(d2 <= p->max_r2))
             continue;
+        if (p->normal_filter && !(st->nx * ph->dx + st->ny * ph->dy + st->nz * ph->dz < 0.0f))
+            continue;
         if (exact) {
-            pm_heap_add(st, p->k, d2, id);
+            pm_heap_add(st, p->k, d2, j);
             continue;
         }
         if (st->count < p->k)
             st->r2 = fmax(st->r2, d2);
         else if (!(d2 <= st->r2))
             continue;
-        st->sr += ph->pr * scale;
-        st->sg += ph->pg * scale;
-        st->sb += ph->pb * scale;
+        st->sr += ph->pr;
+        st->sg += ph->pg;
+        st->sb += ph->pb;
         if (p->index_cap) {
             if (st->count < p->index_cap)
-                indices[(ulong)st->q * p->index_cap + st->count] = id;
+                indices[(ulong)st->q * p->index_cap + st->count] = ph->flags;
             else
                 st->flags |= PM_KNN_INDICES_CUT;
         }
         st->count++;
+    }
+}
+
+/* The cell-ordered copy of the photon map, one work-item per cell: cell c's
+ * photons go to map[map_start[c] ..), their power scaled by the cell's
+ * arrived / stored count (Purcell's power redistribution for the stencil
+ * build; exactly 1 for the others) and their flags replaced by their index
+ * in the caller's photon stream. The search then reads each cell as one
+ * contiguous run instead of through the order indirection. */
+__kernel void pm_knn_gather(SLUICE_PARAMS, global const uint *order, global const uint *cell_start,
+                            global const uint *cell_count, global const uint *cell_arrived,
+                            global const uint *map_start, global const pm_photon *photons,
+                            global pm_photon *map)
+{
+    SLUICE_FOR_EACH (c) {
+        uint n = cell_count[c], from = cell_start[c], to = map_start[c];
+        float scale = n ? (float)cell_arrived[c] / (float)n : 1.0f;
+        for (uint j = 0; j < n; ++j) {
+            uint id = order[from + j];
+            pm_photon ph = photons[id];
+            ph.pr *= scale;
+            ph.pg *= scale;
+            ph.pb *= scale;
+            ph.flags = id;
+            map[to + j] = ph;
+        }
+    }
+}
+
+/* The summed-count table of pm_sat_at in three sweeps, one per axis, a
+ * work-item per line of cells. Along x (line = y + ny z): running sums of
+ * the cell counts. */
+__kernel void pm_knn_sat_x(SLUICE_PARAMS, global const uint *cell_count, pg_params g,
+                           global uint *sat)
+{
+    SLUICE_FOR_EACH (line) {
+        ulong at = (ulong)line * g.dims[0];
+        uint acc = 0u;
+        for (uint x = 0; x < g.dims[0]; ++x) {
+            acc += cell_count[at + x];
+            sat[at + x] = acc;
+        }
+    }
+}
+
+/* Along y (line = x + nx z), in place. */
+__kernel void pm_knn_sat_y(SLUICE_PARAMS, pg_params g, global uint *sat)
+{
+    SLUICE_FOR_EACH (line) {
+        uint nx = g.dims[0];
+        global uint *o = sat + line % nx + (ulong)nx * g.dims[1] * (line / nx);
+        for (uint y = 1; y < g.dims[1]; ++y)
+            o[(ulong)y * nx] += o[(ulong)(y - 1u) * nx];
+    }
+}
+
+/* Along z (line = x + nx y), in place. */
+__kernel void pm_knn_sat_z(SLUICE_PARAMS, pg_params g, global uint *sat)
+{
+    SLUICE_FOR_EACH (line) {
+        ulong plane = (ulong)g.dims[0] * g.dims[1];
+        global uint *o = sat + line;
+        for (uint z = 1; z < g.dims[2]; ++z)
+            o[z * plane] += o[(z - 1u) * plane];
     }
 }
 
@@ -137,13 +261,44 @@ __kernel void pm_knn_init(SLUICE_PARAMS, global pm_knn_result *results, global u
     }
 }
 
+/* Scans the cells [b0, b1] (inclusive, within the grid) row by row along x:
+ * a row's cells are one run of photons, trimmed to the cells within reach of
+ * the bound; an empty row costs two reads. */
+static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const int *n,
+                               const pg_params *g, const pm_knn_params *p, uint exact,
+                               global const pm_photon *map, global const uint *map_start,
+                               global const uint *cell_count, global uint *indices)
+{
+    for (int z = b0[2]; z <= b1[2]; ++z) {
+        float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2]);
+        if (gz > pm_bound(st, p, exact))
+            continue;
+        for (int y = b0[1]; y <= b1[1]; ++y) {
+            uint row = (uint)n[0] * ((uint)y + (uint)n[1] * (uint)z);
+            uint last = row + (uint)b1[0];
+            if (map_start[row + (uint)b0[0]] == map_start[last] + cell_count[last])
+                continue;
+            float t = pm_bound(st, p, exact) - gz -
+                      pm_gap2(st->py, y, n[1], g->lo[1], g->cell[1], p->margin[1]);
+            if (t < 0.0f)
+                continue;
+            int xa = b0[0], xb = b1[0];
+            pm_trim(st->px, t, g->lo[0], g->inv_cell[0], g->dims[0], p->margin[0], &xa, &xb);
+            if (xa > xb)
+                continue;
+            pm_scan_run(st, map_start[row + (uint)xa],
+                        map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, exact, map,
+                        indices);
+        }
+    }
+}
+
 /* One shell for every live query (see the top of the file). */
 __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const pm_query *queries,
-                          global const pm_photon *photons, global const uint *order,
-                          global const uint *cell_start, global const uint *cell_count,
-                          global const uint *cell_arrived, pg_params g, pm_knn_params p, uint exact,
-                          uint base, global pm_knn_result *results, global float *heap_d2,
-                          global uint *heap_id, global uint *indices)
+                          global const pm_photon *map, global const uint *map_start,
+                          global const uint *cell_count, global const uint *sat, pg_params g,
+                          pm_knn_params p, uint exact, uint base, global pm_knn_result *results,
+                          global float *heap_d2, global uint *heap_id, global uint *indices)
 {
     SLUICE_FOR_EACH (i) {
         uint q = live[i];
@@ -176,51 +331,61 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
             n[a] = (int)g.dims[a];
             qc[a] = (int)pg_axis(qp[a], g.lo[a], g.inv_cell[a], g.dims[a]);
         }
-        int s = (int)r.shells;
-        int z0 = max(qc[2] - s, 0), z1 = min(qc[2] + s, n[2] - 1);
-        int y0 = max(qc[1] - s, 0), y1 = min(qc[1] + s, n[1] - 1);
-        int x0 = max(qc[0] - s, 0), x1 = min(qc[0] + s, n[0] - 1);
-        for (int z = z0; z <= z1; ++z) {
-            int zedge = abs(z - qc[2]) == s;
-            float gz = pm_gap2(st.pz, z, n[2], g.lo[2], g.cell[2], p.margin[2]);
-            for (int y = y0; y <= y1; ++y) {
-                int edge = zedge || abs(y - qc[1]) == s;
-                float gyz = gz + pm_gap2(st.py, y, n[1], g.lo[1], g.cell[1], p.margin[1]);
-                if (gyz > pm_bound(&st, &p, exact))
-                    continue;
-                uint row = (uint)n[0] * ((uint)y + (uint)n[1] * (uint)z);
-                /* inside the shell's faces only its two ends along x are new */
-                int step = edge ? 1 : 2 * s;
-                int xa = edge ? x0 : qc[0] - s;
-                for (int x = xa; x <= x1; x += step) {
-                    if (x < 0)
-                        continue;
-                    float d2 = gyz + pm_gap2(st.px, x, n[0], g.lo[0], g.cell[0], p.margin[0]);
-                    if (d2 > pm_bound(&st, &p, exact))
-                        continue;
-                    pm_scan_cell(&st, row + (uint)x, &p, exact, photons, order, cell_start,
-                                 cell_count, cell_arrived, indices);
-                }
-            }
-        }
-        /* The explored cube [qc - s, qc + s]: its inscribed radius d_s, and
-         * whether it covers the grid (a side on the grid's boundary is
-         * infinitely far: nothing lies beyond it). */
-        float d = INFINITY;
-        int covered = 1;
-        for (int a = 0; a < 3; ++a) {
-            if (qc[a] - s > 0) {
-                covered = 0;
-                d = fmin(d, qp[a] - (g.lo[a] + (float)(qc[a] - s) * g.cell[a]) - p.margin[a]);
-            }
-            if (qc[a] + s < n[a] - 1) {
-                covered = 0;
-                d = fmin(d, g.lo[a] + (float)(qc[a] + s + 1) * g.cell[a] - qp[a] - p.margin[a]);
-            }
-        }
-        float ds2 = covered ? INFINITY : (d > 0.0f ? d * d : 0.0f);
+        int s = (int)r.shells, covered = 0;
         int full = exact ? st.count == p.k : st.count >= p.k;
         float reach = exact ? (st.count ? st.hd[0] : 0.0f) : st.r2;
+        /* Shells without photons change nothing: the search jumps to the
+         * first shell u >= s that holds photons or at which it would have
+         * ended, by the summed counts (Purcell explores every shell, one a
+         * pass; the estimate is the same, in fewer passes). */
+        uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n) : 0u;
+        if (pm_cube_count(sat, qc, s, n) == before) {
+            int lo = s, hi = 0;
+            for (int a = 0; a < 3; ++a)
+                hi = max(hi, max(qc[a], n[a] - 1 - qc[a]));
+            hi = max(hi, lo);
+            while (lo < hi) {
+                int mid = lo + (hi - lo) / 2, cov;
+                float dm = pm_cube_d2(qp, qc, mid, n, &g, &p, &cov);
+                if (pm_cube_count(sat, qc, mid, n) != before || cov || dm >= p.max_r2 ||
+                    (full && dm >= reach))
+                    hi = mid;
+                else
+                    lo = mid + 1;
+            }
+            s = lo;
+        }
+        if (pm_cube_count(sat, qc, s, n) != before) {
+            /* the shell's six faces as boxes of cells, each cell once:
+             * the faces across x whole, those across y without the x
+             * faces' cells, those across z without either; a face
+             * without photons (by the summed counts) is skipped */
+            int lo[3], hi[3], in_lo[3], in_hi[3];
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = max(qc[a] - s, 0);
+                hi[a] = min(qc[a] + s, n[a] - 1);
+                in_lo[a] = max(qc[a] - s + 1, 0);
+                in_hi[a] = min(qc[a] + s - 1, n[a] - 1);
+            }
+            for (int side = 0; side < 6; ++side) {
+                int a = side >> 1, at = (side & 1) ? qc[a] + s : qc[a] - s;
+                if (at < 0 || at >= n[a] || ((side & 1) && s == 0))
+                    continue;
+                int b0[3], b1[3];
+                for (int c = 0; c < 3; ++c) {
+                    /* axes before a: inside the faces already done */
+                    b0[c] = c == a ? at : (c > a ? lo[c] : in_lo[c]);
+                    b1[c] = c == a ? at : (c > a ? hi[c] : in_hi[c]);
+                }
+                if (b0[0] > b1[0] || b0[1] > b1[1] || b0[2] > b1[2] ||
+                    pm_box(sat, n, b0[0], b1[0], b0[1], b1[1], b0[2], b1[2]) == 0u)
+                    continue;
+                pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices);
+            }
+        }
+        float ds2 = pm_cube_d2(qp, qc, s, n, &g, &p, &covered);
+        full = exact ? st.count == p.k : st.count >= p.k;
+        reach = exact ? (st.count ? st.hd[0] : 0.0f) : st.r2;
         int done = covered || ds2 >= p.max_r2 || (full && ds2 >= reach);
         r.shells = (uint)s + 1u;
         r.count = st.count;
@@ -236,15 +401,12 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
             /* the estimate from the heap */
             float sr = 0.0f, sg = 0.0f, sb = 0.0f;
             for (uint j = 0; j < st.count; ++j) {
-                uint id = st.hi[j];
-                global const pm_photon *ph = photons + id;
-                uint c = pg_cell(ph->px, ph->py, ph->pz, &g);
-                float scale = (float)cell_arrived[c] / (float)cell_count[c];
-                sr += ph->pr * scale;
-                sg += ph->pg * scale;
-                sb += ph->pb * scale;
+                global const pm_photon *ph = map + st.hi[j];
+                sr += ph->pr;
+                sg += ph->pg;
+                sb += ph->pb;
                 if (p.index_cap && j < p.index_cap)
-                    indices[(ulong)q * p.index_cap + j] = id;
+                    indices[(ulong)q * p.index_cap + j] = ph->flags;
             }
             if (p.index_cap && st.count > p.index_cap)
                 r.flags |= PM_KNN_INDICES_CUT;
