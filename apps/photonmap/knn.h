@@ -5,7 +5,9 @@
  * around the query's cell, one shell per pass; a query that is done leaves
  * the stream of live queries, so a pass costs only the queries still
  * searching (Purcell 6.3.3 and 6.4.3: his tiles and occlusion queries; here
- * a sluice_loop watching the live stream's length).
+ * a sluice_loop watching the live stream's length). Shells without photons
+ * are jumped over (a summed-count table over the cells tells), which
+ * changes the number of passes, never the estimate.
  *
  * Modes:
  *   PM_KNN_ATLEAST  Purcell's rule. A photon beyond the maximum radius is
