@@ -37,7 +37,15 @@ struct pm_photons {
     sluice_stream *rays, *next, *hits, *stored;
     float area_prob; /* share of the photons that leave area lights */
     int specular;    /* the scene has mirrors or glass */
+    float spec[4];   /* their bounding sphere: centre, radius */
 };
+
+/* Share of a point light's photons sent toward the mirrors and glass when
+ * the scene has both (Jensen's projection map, kept unbiased as a mixture
+ * with uniform emission: see pm_emit). Half keeps the uniform part's
+ * indirect light well sampled while caustic photons, which a point light
+ * far from a small mirror rarely sends, cost a few emissions each. */
+#define PM_SPECULAR_SHARE 0.5f
 
 void pm_photons_destroy(pm_photons *p)
 {
@@ -52,6 +60,42 @@ void pm_photons_destroy(pm_photons *p)
     for (size_t i = 0; i < sizeof s / sizeof *s; ++i)
         sluice_stream_destroy(s[i]);
     free(p);
+}
+
+/* The bounding sphere of the mirror and glass triangles (centre of their
+ * box, half its diagonal, padded); radius 0 when there are none. */
+static void specular_sphere(const sr_scene *sc, float out[4])
+{
+    const sr_material *mats = sr_scene_materials(sc);
+    const uint32_t *tm = sr_scene_triangle_materials(sc);
+    const uint32_t *idx = sr_scene_indices(sc);
+    const float *pos = sr_scene_positions(sc);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    size_t found = 0;
+    for (size_t t = 0; t < sr_scene_triangle_count(sc); ++t) {
+        sr_material_kind k = mats[tm[t]].kind;
+        if (k != SR_MATERIAL_MIRROR && k != SR_MATERIAL_GLASS)
+            continue;
+        ++found;
+        for (int v = 0; v < 3; ++v)
+            for (int a = 0; a < 3; ++a) {
+                double x = pos[3 * (size_t)idx[3 * t + (size_t)v] + (size_t)a];
+                lo[a] = fmin(lo[a], x);
+                hi[a] = fmax(hi[a], x);
+            }
+    }
+    memset(out, 0, 4 * sizeof *out);
+    if (!found)
+        return;
+    double r2 = 0.0;
+    for (int a = 0; a < 3; ++a) {
+        out[a] = (float)(0.5 * (lo[a] + hi[a]));
+        r2 += 0.25 * (hi[a] - lo[a]) * (hi[a] - lo[a]);
+    }
+    /* float rounding of the centre must not leave a corner outside */
+    out[3] = (float)(sqrt(r2) * (1.0 + 1e-5) +
+                     1e-6 * sqrt(lo[0] * lo[0] + hi[0] * hi[0] + lo[1] * lo[1] + hi[1] * hi[1] +
+                                 lo[2] * lo[2] + hi[2] * hi[2]));
 }
 
 static double luminance(const float c[3])
@@ -100,6 +144,7 @@ sluice_status pm_photons_create(rt_tracer *tracer, pm_photons **out, char *err, 
     int glass = (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_GLASS)) != 0;
     p->specular = mirror || glass;
     p->area_prob = area_share(p->ds->scene);
+    specular_sphere(p->ds->scene, p->spec);
     char opts[160];
     snprintf(opts, sizeof opts, "%s%s%s%s",
              p->ds->layout == SR_TRI_VERTICES ? " -DRT_WATERTIGHT" : "",
@@ -156,6 +201,11 @@ static sluice_status emit(pm_photons *p, const pm_photon_options *opt, uint32_t 
     a.area_prob = p->area_prob;
     a.area_total = (float)ds->area_total;
     a.scene_eps = ds->scene_eps;
+    a.spec_prob = p->specular ? PM_SPECULAR_SHARE : 0.0f;
+    a.spec_x = p->spec[0];
+    a.spec_y = p->spec[1];
+    a.spec_z = p->spec[2];
+    a.spec_r = p->spec[3];
     sluice_kernel *k = p->k_emit;
     sluice_status st = sluice_kernel_set_stream(k, 0, p->rays, 0);
     sluice_stream *bufs[] = {ds->tri_records,  ds->tri_mat,   ds->materials,

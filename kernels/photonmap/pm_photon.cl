@@ -26,7 +26,8 @@
 
 /* Emits photon i of the batch: from an area light (a point by area, a
  * cosine-weighted direction about its normal: flux Le pi A / p_area) or a
- * point light (uniform direction: flux 4 pi I n_point / (1 - p_area)). */
+ * point light (uniform direction, or toward the mirrors and glass: flux
+ * I n_point / ((1 - p_area) pdf)). */
 __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv,
                       global const uint *tri_mat, global const rt_material *mats,
                       global const rt_point_light *plights, global const uint *area_tris,
@@ -48,11 +49,35 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
         } else {
             uint l = min((uint)(rt_rand(key, 1u) * (float)a.point_lights), a.point_lights - 1u);
             rt_point_light pl = plights[l];
-            d = rt_uniform_sphere(rt_rand(key, 2u), rt_rand(key, 3u));
-            power = (float3)(pl.ir, pl.ig, pl.ib) *
-                    (4.0f * RT_PI * (float)a.point_lights / (1.0f - a.area_prob));
             o = (float3)(pl.px, pl.py, pl.pz);
             off = (float3)(0.0f);
+            /* Jensen's projection map, as a mixture: a share of the photons
+             * go into the cone of the mirrors' and glass's bounding sphere
+             * (where caustics start), the rest uniformly; the power divides
+             * by the mixture's pdf, so nothing is lost or counted twice. A
+             * light inside the sphere emits uniformly. */
+            float3 to = (float3)(a.spec_x, a.spec_y, a.spec_z) - o;
+            float dist2 = dot(to, to), r2 = a.spec_r * a.spec_r;
+            float ps = a.spec_prob > 0.0f && dist2 > r2 ? a.spec_prob : 0.0f;
+            float omc = 0.0f, pdf = 1.0f / (4.0f * RT_PI);
+            int in_cone = 0;
+            if (ps > 0.0f) {
+                float x = r2 / dist2;
+                omc = x / (1.0f + sqrt(1.0f - x));
+                float3 axis = to * rsqrt(dist2);
+                if (rt_rand(key, 4u) < ps) {
+                    d = rt_cone_dir(axis, omc, rt_rand(key, 2u), rt_rand(key, 3u));
+                    in_cone = 1;
+                } else {
+                    d = rt_uniform_sphere(rt_rand(key, 2u), rt_rand(key, 3u));
+                    in_cone = dot(d, axis) >= 1.0f - omc;
+                }
+                pdf = (1.0f - ps) / (4.0f * RT_PI) + (in_cone ? ps / (2.0f * RT_PI * omc) : 0.0f);
+            } else {
+                d = rt_uniform_sphere(rt_rand(key, 2u), rt_rand(key, 3u));
+            }
+            power = (float3)(pl.ir, pl.ig, pl.ib) *
+                    ((float)a.point_lights / ((1.0f - a.area_prob) * pdf));
         }
         /* the flight gets a key of its own: the bounce reads dimensions 1-4,
          * which emission used to choose this photon's light and direction */

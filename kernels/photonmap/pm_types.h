@@ -79,7 +79,10 @@ typedef struct pm_emit_args {
     float area_prob;  /* probability of leaving an area light */
     float area_total; /* total emissive area */
     float scene_eps;
-    rt_u32 pad;
+    float spec_prob;              /* share of a point light's photons sent
+                                     toward the mirrors and glass */
+    float spec_x, spec_y, spec_z; /* their bounding sphere: centre */
+    float spec_r;                 /* and radius */
 } pm_emit_args;
 
 #endif /* SLUICE_PM_TYPES_H */

@@ -41,4 +41,13 @@ inline float3 rt_uniform_sphere(float u1, float u2)
     return (float3)(r * cos(phi), r * sin(phi), z);
 }
 
+/* A uniform direction in the cone about the unit axis `n` whose solid angle
+ * is 2 pi omc (omc = 1 - the cosine of its half-angle, passed as is so that
+ * narrow cones keep their precision): pdf 1 / (2 pi omc). */
+inline float3 rt_cone_dir(float3 n, float omc, float u1, float u2)
+{
+    float t = u1 * omc; /* 1 - cos theta */
+    return rt_about(n, 2.0f * RT_PI * u2, sqrt(fmax(0.0f, t * (2.0f - t))), 1.0f - t);
+}
+
 #endif

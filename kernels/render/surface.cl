@@ -121,16 +121,22 @@ inline float rt_fresnel(float cos_i, float cos_t, int entering, float ior)
     return r0 + (1.0f - r0) * c * c * c * c * c;
 }
 
-/* A cosine-weighted direction about the unit normal `n` (pdf cos / pi), from
- * two uniform numbers; the tangent frame is Duff et al.'s (JCGT 2017). */
-inline float3 rt_cosine_dir(float3 n, float r1, float r2)
+/* The direction at angle phi about the unit axis `n` whose sine and cosine
+ * to it are `st` and `ct`; the tangent frame is Duff et al.'s (JCGT 2017). */
+inline float3 rt_about(float3 n, float phi, float st, float ct)
 {
     float sign = n.z >= 0.0f ? 1.0f : -1.0f;
     float a = -1.0f / (sign + n.z), b = n.x * n.y * a;
     float3 t1 = (float3)(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
     float3 t2 = (float3)(b, sign + n.y * n.y * a, -n.y);
-    float phi = 2.0f * RT_PI * r1, sr = sqrt(r2);
-    return normalize(t1 * (cos(phi) * sr) + t2 * (sin(phi) * sr) + n * sqrt(fmax(0.0f, 1.0f - r2)));
+    return normalize(t1 * (cos(phi) * st) + t2 * (sin(phi) * st) + n * ct);
+}
+
+/* A cosine-weighted direction about the unit normal `n` (pdf cos / pi), from
+ * two uniform numbers. */
+inline float3 rt_cosine_dir(float3 n, float r1, float r2)
+{
+    return rt_about(n, 2.0f * RT_PI * r1, sqrt(r2), sqrt(fmax(0.0f, 1.0f - r2)));
 }
 
 #endif
