@@ -339,7 +339,8 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
          * ended, by the summed counts (Purcell explores every shell, one a
          * pass; the estimate is the same, in fewer passes). */
         uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n) : 0u;
-        if (pm_cube_count(sat, qc, s, n) == before) {
+        uint at_s = pm_cube_count(sat, qc, s, n);
+        if (at_s == before) {
             int lo = s, hi = 0;
             for (int a = 0; a < 3; ++a)
                 hi = max(hi, max(qc[a], n[a] - 1 - qc[a]));
@@ -354,8 +355,9 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
                     lo = mid + 1;
             }
             s = lo;
+            at_s = pm_cube_count(sat, qc, s, n);
         }
-        if (pm_cube_count(sat, qc, s, n) != before) {
+        if (at_s != before) {
             /* the shell's six faces as boxes of cells, each cell once:
              * the faces across x whole, those across y without the x
              * faces' cells, those across z without either; a face
