@@ -229,7 +229,7 @@ static void run_case(fixture *fx, const char *name, const rt_grid_desc *desc, co
         if (s != SLUICE_OK)
             continue;
         for (int m = 0; m < 2; ++m) {
-            pm_knn_options o = {k, max_r, (pm_knn_mode)m, 0};
+            pm_knn_options o = {k, max_r, (pm_knn_mode)m, 0, NULL, NULL};
             pm_knn_stats stats;
             s = pm_knn_query_indices(fx->knn, fx->grid, sp, sq, nq, sr, &o, si, cap, &stats);
             CHECK(s == SLUICE_OK, "%s: query: %s", name, pm_knn_error(fx->knn));
@@ -392,7 +392,7 @@ static void test_batches_and_filter(fixture *fx)
     CHECK_OK(ctx, sluice_stream_upload(sq, qs, nq));
     CHECK_OK(ctx, sr_point_grid_build(fx->grid, &d, sp, sizeof *ph, np, SR_POINT_GRID_COUNT, 0));
     /* k = 2^18: 2 MiB of heap per query, 32 queries per batch */
-    pm_knn_options o = {1u << 18, 0.3f, PM_KNN_EXACT, 0};
+    pm_knn_options o = {1u << 18, 0.3f, PM_KNN_EXACT, 0, NULL, NULL};
     pm_knn_stats st;
     CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, &st));
     CHECK(st.batches == (nq + 31) / 32, "batches %u", st.batches);
@@ -413,7 +413,7 @@ static void test_batches_and_filter(fixture *fx)
     CHECK(bad == 0, "batched exact and atleast disagree with brute force on %zu queries", bad);
     /* normal filter: only photons travelling against the normal (dy < 0
      * for normal +y) */
-    o = (pm_knn_options){16, 0.25f, PM_KNN_ATLEAST, 1};
+    o = (pm_knn_options){16, 0.25f, PM_KNN_ATLEAST, 1, NULL, NULL};
     for (int m = 0; m < 2; ++m) {
         o.mode = (pm_knn_mode)m;
         CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, NULL));
@@ -443,6 +443,112 @@ static void test_batches_and_filter(fixture *fx)
     free(b);
 }
 
+/* The pass hook: one call per pass, each query's count never falls from
+ * one pass to the next and ends at the final result; batches of the exact
+ * mode say how many results are current; a failing hook stops the search
+ * with its status. */
+typedef struct hook_state {
+    sluice_stream *results;
+    size_t n;
+    pm_knn_result *prev, *now;
+    unsigned calls, fail_at;
+    size_t last_answered, shrank, answered_bad;
+} hook_state;
+
+static sluice_status count_hook(void *user, unsigned pass, size_t answered)
+{
+    hook_state *h = user;
+    if (pass != h->calls)
+        h->answered_bad++;
+    h->calls++;
+    if (answered < h->last_answered || answered > h->n)
+        h->answered_bad++;
+    h->last_answered = answered;
+    sluice_status st = sluice_stream_download(h->results, h->now, h->n, NULL);
+    for (size_t q = 0; st == SLUICE_OK && q < answered; ++q) {
+        if (h->now[q].count < h->prev[q].count && q < answered)
+            h->shrank++;
+        h->prev[q] = h->now[q];
+    }
+    if (st != SLUICE_OK)
+        return st;
+    return h->calls == h->fail_at ? SLUICE_ERROR_LIMIT : SLUICE_OK;
+}
+
+static void test_pass_hook(fixture *fx)
+{
+    sluice_context *ctx = fx->ctx;
+    uint32_t seed = 99;
+    const size_t np = 3000, nq = 400;
+    pm_photon *ph = malloc(np * sizeof *ph);
+    pm_query *qs = malloc(nq * sizeof *qs);
+    pm_knn_result *fin = malloc(nq * sizeof *fin);
+    hook_state h = {0};
+    h.n = nq;
+    h.prev = calloc(nq, sizeof *h.prev);
+    h.now = calloc(nq, sizeof *h.now);
+    for (size_t i = 0; i < np; ++i)
+        set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
+    random_queries(qs, nq, -0.2f, 1.2f, &seed);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    rt_grid_desc d = desc_of(lo, hi, 16, 16, 16);
+    sluice_stream *sp = NULL, *sq = NULL;
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *ph, np, &sp));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *qs, nq, &sq));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *fin, nq, &h.results));
+    CHECK_OK(ctx, sluice_stream_upload(sp, ph, np));
+    CHECK_OK(ctx, sluice_stream_upload(sq, qs, nq));
+    CHECK_OK(ctx, sr_point_grid_build(fx->grid, &d, sp, sizeof *ph, np, SR_POINT_GRID_COUNT, 0));
+    /* atleast, then exact in batches of 64 MiB / (8 k) = 16 queries */
+    const uint32_t ks[2] = {40, 1u << 19};
+    for (int m = 0; m < 2; ++m) {
+        pm_knn_options o = {ks[m], 0.5f, (pm_knn_mode)m, 0, count_hook, &h};
+        pm_knn_stats st;
+        memset(h.prev, 0, nq * sizeof *h.prev);
+        h.calls = 0;
+        h.fail_at = 0;
+        h.last_answered = 0;
+        h.shrank = h.answered_bad = 0;
+        CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, h.results, &o, &st));
+        CHECK(h.calls == st.passes && st.passes > 1, "mode %d: %u hook calls for %u passes", m,
+              h.calls, st.passes);
+        CHECK(h.answered_bad == 0 && h.last_answered == nq, "mode %d: answered %zu, %zu bad", m,
+              h.last_answered, h.answered_bad);
+        CHECK(h.shrank == 0, "mode %d: %zu counts fell between passes", m, h.shrank);
+        CHECK_OK(ctx, sluice_stream_download(h.results, fin, nq, NULL));
+        CHECK(memcmp(fin, h.prev, nq * sizeof *fin) == 0,
+              "mode %d: the last pass's results are the final ones", m);
+        /* a hook that fails on its third call ends the search with its status */
+        h.calls = 0;
+        h.fail_at = 3;
+        h.last_answered = 0;
+        CHECK(pm_knn_query(fx->knn, fx->grid, sp, sq, nq, h.results, &o, NULL) ==
+                      SLUICE_ERROR_LIMIT &&
+                  h.calls == 3,
+              "mode %d: failing hook: %u calls", m, h.calls);
+    }
+    /* the search runs again normally after a failed hook */
+    pm_knn_options plain = {40, 0.5f, PM_KNN_ATLEAST, 0, NULL, NULL};
+    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, h.results, &plain, NULL));
+    CHECK_OK(ctx, sluice_stream_download(h.results, h.now, nq, NULL));
+    size_t differ = 0;
+    CHECK_OK(ctx,
+             pm_knn_query(fx->knn, fx->grid, sp, sq, nq, h.results,
+                          &(pm_knn_options){40, 0.5f, PM_KNN_ATLEAST, 0, count_hook, &h}, NULL));
+    CHECK_OK(ctx, sluice_stream_download(h.results, fin, nq, NULL));
+    for (size_t q = 0; q < nq; ++q)
+        differ += memcmp(&fin[q], &h.now[q], sizeof *fin) != 0;
+    CHECK(differ == 0, "a hook changes %zu results", differ);
+    sluice_stream_destroy(sp);
+    sluice_stream_destroy(sq);
+    sluice_stream_destroy(h.results);
+    free(ph);
+    free(qs);
+    free(fin);
+    free(h.prev);
+    free(h.now);
+}
+
 static void test_errors(fixture *fx)
 {
     sluice_context *ctx = fx->ctx;
@@ -457,7 +563,7 @@ static void test_errors(fixture *fx)
     CHECK_OK(ctx, sluice_stream_upload(sq, qs, 4));
     sr_point_grid *fresh = NULL;
     CHECK_OK(ctx, sr_point_grid_create(ctx, &fresh));
-    pm_knn_options o = {8, 1.0f, PM_KNN_ATLEAST, 0};
+    pm_knn_options o = {8, 1.0f, PM_KNN_ATLEAST, 0, NULL, NULL};
     CHECK(pm_knn_query(fx->knn, fresh, sp, sq, 4, sr, &o, NULL) == SLUICE_ERROR_INVALID_ARGUMENT,
           "grid not built");
     const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
@@ -517,6 +623,7 @@ int main(void)
     if (fx.grid && fx.knn) {
         test_errors(&fx);
         test_batches_and_filter(&fx);
+        test_pass_hook(&fx);
         test_cases(&fx);
     }
     pm_knn_destroy(fx.knn);

@@ -119,6 +119,71 @@ static void test_builds_agree(void)
     sr_scene_destroy(s);
 }
 
+/* Intermediate images (Purcell 6.3.4): one per kNN pass; the last one is
+ * the final image; they do not change the image; a failing callback stops
+ * the render with its status and message. */
+typedef struct previews {
+    unsigned count, fail_at;
+    size_t pixels;
+    float *last;
+} previews;
+
+static sluice_status keep_preview(void *user, const sr_image *img, unsigned index, char *err,
+                                  size_t err_size)
+{
+    previews *p = user;
+    CHECK(index == p->count, "image index %u, want %u", index, p->count);
+    p->count++;
+    memcpy(p->last, sr_image_pixels_const(img), p->pixels * 3 * sizeof(float));
+    if (p->count == p->fail_at) {
+        snprintf(err, err_size, "preview sink full");
+        return SLUICE_ERROR_LIMIT;
+    }
+    return SLUICE_OK;
+}
+
+static void test_pass_images(void)
+{
+    sr_scene *s = builtin("glassball");
+    if (!s)
+        return;
+    const unsigned w = 64, h = 48;
+    pm_options o = pm_options_default();
+    o.photons = 2000;
+    o.k = 16;
+    pm_stats plain_st, st;
+    float *plain = render(s, o, w, h, &plain_st);
+    previews p = {0, 0, (size_t)w * h, calloc((size_t)w * h * 3, sizeof(float))};
+    o.pass_image = keep_preview;
+    o.pass_image_user = &p;
+    float *img = render(s, o, w, h, &st);
+    CHECK(p.count == st.knn_passes && p.count == st.pass_images && p.count > 1,
+          "%u images for %u kNN passes", p.count, st.knn_passes);
+    CHECK(plain && img && !memcmp(plain, img, (size_t)w * h * 3 * sizeof(float)),
+          "intermediate images change the image");
+    size_t differ = 0;
+    for (size_t i = 0; img && i < (size_t)w * h * 3; ++i)
+        differ += fabsf(p.last[i] - img[i]) > 1e-6f * fmaxf(1.0f, img[i]);
+    CHECK(differ == 0, "the last intermediate image differs from the final one in %zu values",
+          differ);
+    /* a failing callback stops the render with its status and message */
+    char err[1024] = "";
+    o.width = w;
+    o.height = h;
+    p.count = 0;
+    p.fail_at = 2;
+    pm_renderer *r = NULL;
+    CHECK_OK(ctx, pm_renderer_create(ctx, s, &o, &r, err, sizeof err));
+    sluice_status rs = r ? pm_renderer_sample(r, err, sizeof err) : SLUICE_ERROR_INVALID_ARGUMENT;
+    CHECK(rs == SLUICE_ERROR_LIMIT && p.count == 2 && strstr(err, "preview sink full"),
+          "failing callback: %s after %u images: %s", sluice_status_string(rs), p.count, err);
+    pm_renderer_destroy(r);
+    free(plain);
+    free(img);
+    free(p.last);
+    sr_scene_destroy(s);
+}
+
 /* The furnace: a closed diffuse sphere of radius R and albedo a with a point
  * light of intensity I at its centre. Direct irradiance is I / R^2 on every
  * point of the wall; each bounce multiplies the light by a and spreads it
@@ -202,7 +267,7 @@ static void test_furnace(void)
             st = sluice_stream_upload(qs, q, Q);
         if (st == SLUICE_OK)
             st = sluice_stream_create(ctx, sizeof(pm_knn_result), Q, &rs);
-        pm_knn_options ko = {200, R, PM_KNN_ATLEAST, 1};
+        pm_knn_options ko = {200, R, PM_KNN_ATLEAST, 1, NULL, NULL};
         if (st == SLUICE_OK)
             st = pm_knn_query(knn, g, photons, qs, Q, rs, &ko, NULL);
         if (st == SLUICE_OK)
@@ -253,6 +318,7 @@ static void test_cli(const char *exe)
         {"--max-radius -1", "--max-radius"},
         {"--slots 0", "--slots"},
         {"--out a.bmp", "--out"},
+        {"--pass-images frames", "--pass-images"},
         {"--time x", "--time"},
         {"--frobnicate 1", "--frobnicate"},
         {"--scene no-such-scene.obj", "no-such-scene.obj"},
@@ -279,6 +345,25 @@ static void test_cli(const char *exe)
     CHECK(strstr(out, "\"trace_photons\"") && strstr(out, "\"stored\"") &&
               strstr(out, "\"live_per_pass\""),
           "statistics JSON: %s", out);
+    /* intermediate images: pm_pass-0000.png on; a folder that does not
+     * exist is an error naming the file */
+    remove("pm_pass-0000.png");
+    snprintf(cmd, sizeof cmd,
+             "%s --scene glassball --size 32x24 --photons 500 --out pm_cli.png --pass-images "
+             "pm_pass.png --quiet",
+             exe);
+    FILE *first = NULL;
+    CHECK(check_run(cmd, out, sizeof out) == 0 && (first = fopen("pm_pass-0000.png", "rb")),
+          "--pass-images: %s", out);
+    if (first)
+        fclose(first);
+    snprintf(cmd, sizeof cmd,
+             "%s --scene glassball --size 32x24 --photons 500 --out pm_cli.png --pass-images "
+             "no-such-dir/p.png --quiet",
+             exe);
+    int rc = check_run(cmd, out, sizeof out);
+    CHECK(rc != 0 && strstr(out, "no-such-dir/p-0000.png"), "--pass-images into nowhere: %d %s", rc,
+          out);
 }
 
 int main(int argc, char **argv)
@@ -288,6 +373,7 @@ int main(int argc, char **argv)
         test_cli(argv[2]);
     } else {
         test_builds_agree();
+        test_pass_images();
         test_furnace();
     }
     sluice_context_destroy(ctx);

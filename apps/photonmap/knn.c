@@ -56,6 +56,11 @@ struct pm_knn {
     sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
     sluice_stream *map, *map_start; /* the cell-ordered copy of the photons */
     sluice_stream *sat;             /* summed counts: skips shells without photons */
+    /* the current call's pass hook */
+    pm_knn_pass_fn on_pass;
+    void *on_pass_user;
+    unsigned passes_before; /* passes of the earlier batches */
+    size_t answered;        /* results current in the batch being searched */
     char message[512];
 };
 
@@ -72,7 +77,6 @@ static double now(void)
 /* One pass of the loop. */
 static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
 {
-    (void)pass;
     (void)choice;
     pm_knn *knn = user;
     sluice_status st = sluice_stream_clear(knn->next);
@@ -82,6 +86,8 @@ static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
         st = sluice_kernel_launch(knn->k_live);
     if (st == SLUICE_OK)
         st = sluice_stream_swap(knn->live, knn->next);
+    if (st == SLUICE_OK && knn->on_pass)
+        st = knn->on_pass(knn->on_pass_user, knn->passes_before + pass, knn->answered);
     return st;
 }
 
@@ -381,8 +387,16 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st != SLUICE_OK)
         goto runtime_fail;
 
+    /* the length first: a pass hook may read the results */
+    st = sluice_stream_set_length(results, n);
+    if (st != SLUICE_OK)
+        goto runtime_fail;
+    knn->on_pass = o->on_pass;
+    knn->on_pass_user = o->on_pass_user;
+    knn->passes_before = 0;
     for (size_t base = 0; base < n; base += batch) {
         size_t bn = n - base < batch ? n - base : batch;
+        knn->answered = base + bn;
         uint32_t b32 = (uint32_t)base;
         step = "starting a batch";
         st = sluice_kernel_set_arg(knn->k_init, 2, sizeof b32, &b32);
@@ -396,8 +410,11 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
             goto runtime_fail;
         step = "searching";
         st = sluice_loop_run(knn->loop);
-        if (st != SLUICE_OK)
+        knn->passes_before += sluice_loop_pass_count(knn->loop);
+        if (st != SLUICE_OK) {
+            knn->on_pass = NULL;
             goto runtime_fail;
+        }
         if (stats) {
             unsigned passes = sluice_loop_pass_count(knn->loop);
             for (unsigned i = 0; i < passes && i < PM_KNN_STATS_PASSES; ++i)
@@ -406,8 +423,8 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
             stats->batches++;
         }
     }
-    st = sluice_stream_set_length(results, n);
-    if (st == SLUICE_OK && indices)
+    knn->on_pass = NULL;
+    if (indices)
         st = sluice_stream_set_length(indices, n * cap);
     if (st == SLUICE_OK)
         st = sluice_context_finish(knn->ctx);

@@ -63,13 +63,25 @@ typedef enum pm_knn_mode {
 /** Passes recorded per call in pm_knn_stats.live (the first ones). */
 #define PM_KNN_STATS_PASSES 64
 
+/**
+ * Called after every pass (Purcell 6.3.4: intermediate results). Results
+ * [0, answered) are current: a query still searching holds the photons found
+ * so far and, in atleast mode, the radius that takes them in (exact mode
+ * sums its heap only when the query is done). `pass` counts the passes of
+ * the call over all batches, from 0. A non-OK return stops the search with
+ * that status.
+ */
+typedef sluice_status (*pm_knn_pass_fn)(void *user, unsigned pass, size_t answered);
+
 /** What to search for. */
 typedef struct pm_knn_options {
-    uint32_t k;        /**< photons sought (1 .. PM_KNN_MAX_K) */
-    float max_radius;  /**< photons farther than this are never used (> 0, may be INFINITY) */
-    pm_knn_mode mode;  /**< PM_KNN_ATLEAST or PM_KNN_EXACT */
-    int normal_filter; /**< non-zero: only photons arriving on the side the
-                            query's normal faces (dot(n, d) < 0) */
+    uint32_t k;             /**< photons sought (1 .. PM_KNN_MAX_K) */
+    float max_radius;       /**< photons farther than this are never used (> 0, may be INFINITY) */
+    pm_knn_mode mode;       /**< PM_KNN_ATLEAST or PM_KNN_EXACT */
+    int normal_filter;      /**< non-zero: only photons arriving on the side the
+                                 query's normal faces (dot(n, d) < 0) */
+    pm_knn_pass_fn on_pass; /**< NULL, or called after every pass */
+    void *on_pass_user;     /**< passed to on_pass */
 } pm_knn_options;
 
 /** Statistics of the last query call. */

@@ -43,12 +43,17 @@ static void usage(FILE *out)
           "  --light-samples N        shadow rays per area light and hit (default: the scene's)\n"
           "  --max-depth N            mirror/glass bounces of eye rays and photon bounces\n"
           "                           (default: the scene's)\n"
-          "  --exec stream|fused      the tracer's execution mode (default stream)\n\n"
+          "  --exec stream|fused      the tracer's execution mode (default stream)\n"
+          "  --pass-images FILE       also write the image after every kNN pass, the\n"
+          "                           estimates as they stand (Purcell 6.3.4): FILE with\n"
+          "                           -0000, -0001, ... before its extension (.png, .exr,\n"
+          "                           .hdr); their cost is left out of the phases\n\n"
           "Ctrl-C finishes the current sample, writes the image so far and exits with 130.\n\n"
           "examples:\n"
           "  " PROG " --scene glassball --out glassball.png\n"
           "  " PROG " --scene ring --map stencil --grid 250x1x250 --stats ring.json\n"
-          "  " PROG " --scene cornell --photons 65000 --k 500 --grid 25x25x50 --light-samples 32\n",
+          "  " PROG " --scene cornell --photons 65000 --k 500 --grid 25x25x50 --light-samples 32\n"
+          "  " PROG " --scene glassball --pass-images frames/glassball.png\n",
           out);
 }
 
@@ -56,6 +61,7 @@ typedef struct cli {
     sr_cli_common common;
     pm_options opt;
     unsigned spp;
+    const char *pass_images; /* --pass-images pattern, or NULL */
     int have_spp, have_photons, have_k, have_ls, have_depth;
 } cli;
 
@@ -138,6 +144,10 @@ static int parse(int argc, char **argv, cli *c)
             if ((k = sr_cli_choice(v, (const char *const[]){"stream", "fused", NULL})) < 0)
                 return sr_cli_bad(PROG, a, v, "expected stream or fused");
             c->opt.tracer.exec = k ? RT_EXEC_FUSED : RT_EXEC_STREAM;
+        } else if (!strcmp(a, "--pass-images")) {
+            if ((k = sr_cli_image_path(PROG, a, v)) != 0)
+                return k;
+            c->pass_images = v;
         } else {
             return sr_cli_bad(PROG, a, NULL, "unknown option");
         }
@@ -174,6 +184,26 @@ static sluice_status write_image(run *u, size_t *bad)
 static sluice_status checkpoint(void *user)
 {
     return write_image(user, NULL);
+}
+
+/* --pass-images: the pattern with -NNNN before its extension. */
+static sluice_status write_pass_image(void *user, const sr_image *img, unsigned index, char *err,
+                                      size_t err_size)
+{
+    const char *pattern = user;
+    const char *dot = strrchr(pattern, '.');
+    char path[4096];
+    int n = snprintf(path, sizeof path, "%.*s-%04u%s", (int)(dot - pattern), pattern, index, dot);
+    if (n < 0 || (size_t)n >= sizeof path) {
+        snprintf(err, err_size, "--pass-images %s: the file name is too long", pattern);
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    char why[512] = "";
+    sluice_status st = sr_image_write(img, path, why, sizeof why);
+    if (st != SLUICE_OK)
+        snprintf(err, err_size, "--pass-images: writing %s: %s", path,
+                 why[0] ? why : sluice_status_string(st));
+    return st;
 }
 
 static const char *const map_names[] = {"count", "bitonic", "stencil"};
@@ -226,6 +256,11 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
                 (unsigned long long)rs->rays[RT_KIND_REFLECT],
                 (unsigned long long)rs->rays[RT_KIND_REFRACT],
                 (unsigned long long)(p->emitted + p->bounced), (unsigned long long)ts->rays);
+        if (s->pass_images)
+            fprintf(f,
+                    "intermediate images: %u written in %.3f s (left out of the phases, counted "
+                    "in the total)\n",
+                    s->pass_images, s->pass_images_s);
         fprintf(f, "skipped: %s\n", pm_renderer_skipped(r));
         if (sluice_profile_enabled(ctx))
             sluice_profile_print(ctx, f);
@@ -270,6 +305,8 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
             (unsigned long long)rs->rays[RT_KIND_EYE], (unsigned long long)rs->rays[RT_KIND_SHADOW],
             (unsigned long long)rs->rays[RT_KIND_REFLECT],
             (unsigned long long)rs->rays[RT_KIND_REFRACT], (unsigned long long)ts->rays);
+    fprintf(f, "  \"pass_images\": {\"count\": %u, \"seconds\": %.6f},\n", s->pass_images,
+            s->pass_images_s);
     fprintf(f, "  \"skipped\": \"%s\"\n}\n", pm_renderer_skipped(r));
 }
 
@@ -302,6 +339,11 @@ int main(int argc, char **argv)
     unsigned spp = c.have_spp ? c.spp : 1;
     if (cc->time_limit > 0 && !c.have_spp)
         spp = 1u << 20;
+
+    if (c.pass_images) {
+        o->pass_image = write_pass_image;
+        o->pass_image_user = (void *)c.pass_images;
+    }
 
     sluice_context *ctx = NULL;
     pm_renderer *r = NULL;

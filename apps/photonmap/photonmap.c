@@ -34,6 +34,12 @@ struct pm_renderer {
     float max_radius;
     double estimate_in_sample; /* seconds of estimates during the current sample */
     sluice_status gather_status;
+    /* intermediate images (pm_options.pass_image): the current gather's
+     * estimates drawn over the film */
+    sr_film *preview;
+    sr_image *preview_img;
+    sluice_stream *preview_points;
+    int preview_failed;
     char *err; /* the current call's message buffer (gather writes there) */
     size_t err_size;
     pm_stats stats;
@@ -72,6 +78,8 @@ void pm_renderer_destroy(pm_renderer *r)
     sluice_counters_destroy(r->counters);
     sluice_stream_destroy(r->queries);
     sluice_stream_destroy(r->results);
+    sr_film_destroy(r->preview);
+    sr_image_destroy(r->preview_img);
     rt_tracer_destroy(r->tracer);
     free(r);
 }
@@ -102,6 +110,62 @@ static double storing_area(const sr_scene *sc)
 }
 
 static sluice_status gather(void *user, sluice_stream *points, size_t n);
+
+/* Adds the estimates of the first `answered` gather points to `accum`. */
+static sluice_status add_estimates(pm_renderer *r, sluice_stream *points, sluice_stream *accum,
+                                   size_t answered)
+{
+    uint32_t a = (uint32_t)answered;
+    sluice_status st = sluice_kernel_set_input(r->k_add, 0, points);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(r->k_add, 1, r->results, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(r->k_add, 2, accum, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(r->k_add, 3, sizeof a, &a);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch(r->k_add);
+    return st;
+}
+
+/* The kNN pass hook: the film plus the estimates as they stand, handed to
+ * pm_options.pass_image. Its time is kept out of the phases. */
+static sluice_status preview_pass(void *user, unsigned pass, size_t answered)
+{
+    (void)pass;
+    pm_renderer *r = user;
+    double t0 = sr_clock_seconds();
+    sluice_context *ctx = r->ctx;
+    sr_film *film = rt_renderer_film(r->whitted);
+    sluice_status st = SLUICE_OK;
+    if (!r->preview)
+        st = sr_film_create(ctx, r->opt.width, r->opt.height, &r->preview, r->err, r->err_size);
+    if (st == SLUICE_OK && !r->preview_img)
+        st = sr_image_create(r->opt.width, r->opt.height, 3, &r->preview_img, r->err, r->err_size);
+    if (st != SLUICE_OK) {
+        r->preview_failed = 1;
+        return st;
+    }
+    st = sr_film_clear(r->preview);
+    if (st == SLUICE_OK)
+        st = add_estimates(r, r->preview_points, sr_film_accum(r->preview), answered);
+    if (st == SLUICE_OK)
+        st = sr_film_resolve_sum(film, r->preview, 1.0 / (double)(r->stats.samples + 1),
+                                 r->preview_img, NULL);
+    if (st != SLUICE_OK) {
+        sr_set_error(r->err, r->err_size, "intermediate image: %s",
+                     st == SLUICE_ERROR_OUT_OF_MEMORY ? "out of memory"
+                                                      : sluice_context_error(ctx));
+        r->preview_failed = 1;
+        return st;
+    }
+    st = r->opt.pass_image(r->opt.pass_image_user, r->preview_img, r->stats.pass_images, r->err,
+                           r->err_size);
+    r->preview_failed = st != SLUICE_OK;
+    r->stats.pass_images++;
+    r->stats.pass_images_s += sr_clock_seconds() - t0;
+    return st;
+}
 
 sluice_status pm_renderer_create(sluice_context *ctx, const sr_scene *scene, const pm_options *opt,
                                  pm_renderer **out, char *err, size_t err_size)
@@ -310,12 +374,20 @@ static sluice_status gather(void *user, sluice_stream *points, size_t n)
         st = sluice_kernel_launch(r->k_queries);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(r->queries, n);
-    pm_knn_options ko = {r->opt.k, r->max_radius, r->opt.knn, 1};
+    pm_knn_options ko = {r->opt.k, r->max_radius, r->opt.knn, 1, NULL, NULL};
+    if (r->opt.pass_image) {
+        ko.on_pass = preview_pass;
+        ko.on_pass_user = r;
+        r->preview_points = points;
+        r->preview_failed = 0;
+    }
     pm_knn_stats ks;
+    double previews_before = r->stats.pass_images_s;
     if (st == SLUICE_OK) {
         st = pm_knn_query(r->knn, r->grid, r->map, r->queries, n, r->results, &ko, &ks);
         if (st != SLUICE_OK) {
-            sr_set_error(r->err, r->err_size, "radiance estimate: %s", pm_knn_error(r->knn));
+            if (!r->preview_failed) /* otherwise the hook has said why */
+                sr_set_error(r->err, r->err_size, "radiance estimate: %s", pm_knn_error(r->knn));
             r->gather_status = st;
             return st;
         }
@@ -323,13 +395,7 @@ static sluice_status gather(void *user, sluice_stream *points, size_t n)
     if (st == SLUICE_OK)
         st = sluice_counters_reset(r->counters);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_input(r->k_add, 0, points);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(r->k_add, 1, r->results, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(r->k_add, 2, sr_film_accum(rt_renderer_film(r->whitted)), 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_launch(r->k_add);
+        st = add_estimates(r, points, sr_film_accum(rt_renderer_film(r->whitted)), n);
     uint32_t c[GC_COUNT];
     if (st == SLUICE_OK)
         st = sluice_counters_read(r->counters, c);
@@ -348,7 +414,7 @@ static sluice_status gather(void *user, sluice_stream *points, size_t n)
     s->knn_passes += ks.passes;
     for (unsigned i = 0; i < PM_KNN_STATS_PASSES; ++i)
         s->live[i] += ks.live[i];
-    r->estimate_in_sample += sr_clock_seconds() - t0;
+    r->estimate_in_sample += sr_clock_seconds() - t0 - (r->stats.pass_images_s - previews_before);
     return SLUICE_OK;
 }
 
@@ -363,9 +429,10 @@ sluice_status pm_renderer_sample(pm_renderer *r, char *err, size_t err_size)
     r->err_size = err_size;
     r->gather_status = SLUICE_OK;
     r->estimate_in_sample = 0;
+    double previews_before = r->stats.pass_images_s;
     double t0 = sr_clock_seconds();
     st = rt_renderer_sample(r->whitted);
-    double t = sr_clock_seconds() - t0;
+    double t = sr_clock_seconds() - t0 - (r->stats.pass_images_s - previews_before);
     r->stats.estimate_s += r->estimate_in_sample;
     r->stats.trace_rays_s += t - r->estimate_in_sample;
     if (st != SLUICE_OK) {

@@ -14,11 +14,22 @@
 #ifndef PM_PHOTONMAP_H
 #define PM_PHOTONMAP_H
 
+#include "film.h"
 #include "knn.h"
 #include "photons.h"
 #include "point_grid.h"
 #include "render.h"
 #include "tracer.h"
+
+/**
+ * Receives an intermediate image (Purcell 6.3.4): the film so far plus every
+ * radiance estimate of the current gather step as it stands after one kNN
+ * pass (queries still searching show the photons found so far). `index`
+ * counts the images of the render from 0. A non-OK return stops the render
+ * with that status; `err` then says why.
+ */
+typedef sluice_status (*pm_pass_image_fn)(void *user, const sr_image *img, unsigned index,
+                                          char *err, size_t err_size);
 
 /** What to render. */
 typedef struct pm_options {
@@ -34,6 +45,8 @@ typedef struct pm_options {
     uint32_t grid_dims[3];        /**< photon-map grid; all 0: chosen from count and radius */
     pm_knn_mode knn;              /**< atleast (Purcell) or exact (Jensen) */
     rt_tracer_options tracer;     /**< the tracer's options */
+    pm_pass_image_fn pass_image;  /**< NULL, or called after every kNN pass */
+    void *pass_image_user;        /**< passed to pass_image */
 } pm_options;
 
 /** Defaults: 512x384, seed 1, 1 light sample, depth 5, 16,000 photons,
@@ -57,6 +70,8 @@ typedef struct pm_stats {
     unsigned knn_passes;                /**< kNN passes, all estimates */
     uint32_t live[PM_KNN_STATS_PASSES]; /**< live queries after kNN pass i (summed) */
     unsigned samples;
+    unsigned pass_images; /**< intermediate images handed to pm_options.pass_image */
+    double pass_images_s; /**< their cost, left out of the phases above */
 } pm_stats;
 
 typedef struct pm_renderer pm_renderer;

@@ -138,13 +138,18 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
     return 1;
 }
 
-int sr_cli_common_finish(const char *prog, const sr_cli_common *c)
+int sr_cli_image_path(const char *prog, const char *opt, const char *path)
 {
-    const char *dot = strrchr(c->out, '.');
+    const char *dot = strrchr(path, '.');
     if (!dot || (strcasecmp(dot, ".png") != 0 && strcasecmp(dot, ".exr") != 0 &&
                  strcasecmp(dot, ".hdr") != 0))
-        return sr_cli_bad(prog, "--out", c->out, "the file name must end in .png, .exr or .hdr");
+        return sr_cli_bad(prog, opt, path, "the file name must end in .png, .exr or .hdr");
     return 0;
+}
+
+int sr_cli_common_finish(const char *prog, const sr_cli_common *c)
+{
+    return sr_cli_image_path(prog, "--out", c->out);
 }
 
 void sr_cli_common_usage(FILE *out)

@@ -43,6 +43,10 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
  *  extension). 0 when fine, 2 after printing a message. */
 int sr_cli_common_finish(const char *prog, const sr_cli_common *c);
 
+/** Checks that an image path given to option `opt` ends in .png, .exr or
+ *  .hdr: 0, or sr_cli_bad's exit status after saying why. */
+int sr_cli_image_path(const char *prog, const char *opt, const char *path);
+
 /** Loads c->scene (a built-in name or a file; a default light is added to a
  *  scene without one). 0 on success, else 1 after printing
  *  "PROG: --scene NAME: why". */

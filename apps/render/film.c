@@ -78,18 +78,27 @@ size_t sr_film_bytes(const sr_film *f)
     return f ? (size_t)f->width * f->height * 3 * sizeof(int64_t) : 0;
 }
 
-sluice_status sr_film_resolve(sr_film *f, double scale, sr_image *img, size_t *bad_pixels)
+/* Resolves f (plus `extra`, a film of the same size, when not NULL). */
+static sluice_status resolve(sr_film *f, sr_film *extra, double scale, sr_image *img,
+                             size_t *bad_pixels)
 {
     if (bad_pixels)
         *bad_pixels = 0;
     if (!f || !img || sr_image_width(img) != f->width || sr_image_height(img) != f->height ||
-        sr_image_channels(img) != 3 || !isfinite(scale))
+        sr_image_channels(img) != 3 || !isfinite(scale) ||
+        (extra && (extra->width != f->width || extra->height != f->height)))
         return SLUICE_ERROR_INVALID_ARGUMENT;
     size_t pixels = (size_t)f->width * f->height;
     int64_t *acc = malloc(pixels * 3 * sizeof *acc);
-    if (!acc)
+    int64_t *more = extra ? malloc(pixels * 3 * sizeof *more) : NULL;
+    if (!acc || (extra && !more)) {
+        free(acc);
+        free(more);
         return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
     sluice_status st = sluice_stream_download(f->accum, acc, pixels, NULL);
+    if (st == SLUICE_OK && extra)
+        st = sluice_stream_download(extra->accum, more, pixels, NULL);
     if (st == SLUICE_OK) {
         float *px = sr_image_pixels(img);
         double s = scale / (double)RT_FIXED_SCALE;
@@ -98,7 +107,10 @@ sluice_status sr_film_resolve(sr_film *f, double scale, sr_image *img, size_t *b
             int ok = 1;
             float v[3];
             for (int k = 0; k < 3; ++k) {
-                v[k] = (float)((double)acc[3 * i + k] * s);
+                /* in double: the int64 sum could wrap where the images'
+                 * sum would not */
+                double a = (double)acc[3 * i + k] + (more ? (double)more[3 * i + k] : 0.0);
+                v[k] = (float)(a * s);
                 ok &= isfinite(v[k]) != 0;
             }
             if (!ok) {
@@ -111,7 +123,19 @@ sluice_status sr_film_resolve(sr_film *f, double scale, sr_image *img, size_t *b
             *bad_pixels = bad;
     }
     free(acc);
+    free(more);
     return st;
+}
+
+sluice_status sr_film_resolve(sr_film *f, double scale, sr_image *img, size_t *bad_pixels)
+{
+    return resolve(f, NULL, scale, img, bad_pixels);
+}
+
+sluice_status sr_film_resolve_sum(sr_film *f, sr_film *extra, double scale, sr_image *img,
+                                  size_t *bad_pixels)
+{
+    return extra ? resolve(f, extra, scale, img, bad_pixels) : SLUICE_ERROR_INVALID_ARGUMENT;
 }
 
 sluice_status sr_film_write(sr_film *f, double scale, const char *path, size_t *bad_pixels,

@@ -39,6 +39,11 @@ size_t sr_film_bytes(const sr_film *f);
  */
 sluice_status sr_film_resolve(sr_film *f, double scale, sr_image *img, size_t *bad_pixels);
 
+/** sr_film_resolve of the sum of two films of the same size (a film and a
+ *  preview layer over it, e.g. the photon mapper's intermediate estimates). */
+sluice_status sr_film_resolve_sum(sr_film *f, sr_film *extra, double scale, sr_image *img,
+                                  size_t *bad_pixels);
+
 /**
  * sr_film_resolve into the film's own image, then writes it to `path` (the
  * extension picks the format: .png, .exr, .hdr). On failure `err` says why.

@@ -26,14 +26,16 @@ __kernel void pm_gather_queries(SLUICE_PARAMS, global const rt_gather *g, global
 }
 
 /* Adds gather point i's estimate to its pixel (the weight already holds the
- * path throughput times albedo / pi). */
+ * path throughput times albedo / pi). Points from `answered` on have no
+ * current result (an intermediate image of a batched search) and add
+ * nothing. */
 __kernel void pm_gather_add(SLUICE_PARAMS, global const rt_gather *g,
-                            global const pm_knn_result *res, global long *accum)
+                            global const pm_knn_result *res, global long *accum, uint answered)
 {
     SLUICE_FOR_EACH (i) {
         rt_gather p = g[i];
         pm_knn_result r = res[i];
-        int some = r.count > 0u && r.r2 > 0.0f;
+        int some = i < answered && r.count > 0u && r.r2 > 0.0f;
         SLUICE_COUNT(0, some);
         SLUICE_COUNT(1, !some);
         if (some) {
