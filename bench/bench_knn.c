@@ -153,7 +153,7 @@ static int run(sr_point_grid *grid, pm_knn *knn, const float *pos, sluice_stream
         return 0;
     }
     memcpy(r->dims, d.dims, sizeof r->dims);
-    pm_knn_options o = {k, r->max_radius, PM_KNN_ATLEAST, 0, NULL, NULL};
+    pm_knn_options o = {k, r->max_radius, PM_KNN_ATLEAST, 0, NULL, NULL, 0};
     pm_knn_stats st;
     r->build_s = r->atleast_s = r->exact_s = 1e30;
     for (unsigned rep = 0; rep <= reps; ++rep) {

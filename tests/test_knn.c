@@ -229,7 +229,7 @@ static void run_case(fixture *fx, const char *name, const rt_grid_desc *desc, co
         if (s != SLUICE_OK)
             continue;
         for (int m = 0; m < 2; ++m) {
-            pm_knn_options o = {k, max_r, (pm_knn_mode)m, 0, NULL, NULL};
+            pm_knn_options o = {k, max_r, (pm_knn_mode)m, 0, NULL, NULL, 0};
             pm_knn_stats stats;
             s = pm_knn_query_indices(fx->knn, fx->grid, sp, sq, nq, sr, &o, si, cap, &stats);
             CHECK(s == SLUICE_OK, "%s: query: %s", name, pm_knn_error(fx->knn));
@@ -245,6 +245,21 @@ static void run_case(fixture *fx, const char *name, const rt_grid_desc *desc, co
                 check_against_flann(full, (pm_knn_mode)m, &f, ph, qs, nq, res, ind, cap, k, max_r);
                 first[m] = malloc(nq * sizeof *res);
                 memcpy(first[m], res, nq * sizeof *res);
+                /* more shells per pass: the same shells in the same order,
+                 * so the same results, in fewer passes */
+                static const uint32_t spp[2] = {3, PM_KNN_ALL_SHELLS};
+                for (int v = 0; v < 2; ++v) {
+                    pm_knn_stats more;
+                    o.shells_per_pass = spp[v];
+                    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, &more));
+                    CHECK_OK(ctx, sluice_stream_download(sr, res, nq, NULL));
+                    CHECK(memcmp(first[m], res, nq * sizeof *res) == 0 &&
+                              more.passes <= stats.passes &&
+                              (spp[v] != PM_KNN_ALL_SHELLS || more.passes == more.batches),
+                          "%s: mode %d: %u shells per pass: other results or %u passes (one "
+                          "shell: %u)",
+                          full, m, spp[v], more.passes, stats.passes);
+                }
             } else {
                 CHECK(memcmp(first[m], res, nq * sizeof *res) == 0,
                       "%s: mode %d: build %d differs from the counting build", name, m, b);
@@ -392,7 +407,7 @@ static void test_batches_and_filter(fixture *fx)
     CHECK_OK(ctx, sluice_stream_upload(sq, qs, nq));
     CHECK_OK(ctx, sr_point_grid_build(fx->grid, &d, sp, sizeof *ph, np, SR_POINT_GRID_COUNT, 0));
     /* k = 2^18: 2 MiB of heap per query, 32 queries per batch */
-    pm_knn_options o = {1u << 18, 0.3f, PM_KNN_EXACT, 0, NULL, NULL};
+    pm_knn_options o = {1u << 18, 0.3f, PM_KNN_EXACT, 0, NULL, NULL, 0};
     pm_knn_stats st;
     CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, &st));
     CHECK(st.batches == (nq + 31) / 32, "batches %u", st.batches);
@@ -413,7 +428,7 @@ static void test_batches_and_filter(fixture *fx)
     CHECK(bad == 0, "batched exact and atleast disagree with brute force on %zu queries", bad);
     /* normal filter: only photons travelling against the normal (dy < 0
      * for normal +y) */
-    o = (pm_knn_options){16, 0.25f, PM_KNN_ATLEAST, 1, NULL, NULL};
+    o = (pm_knn_options){16, 0.25f, PM_KNN_ATLEAST, 1, NULL, NULL, 0};
     for (int m = 0; m < 2; ++m) {
         o.mode = (pm_knn_mode)m;
         CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, NULL));
@@ -502,7 +517,7 @@ static void test_pass_hook(fixture *fx)
     /* atleast, then exact in batches of 64 MiB / (8 k) = 16 queries */
     const uint32_t ks[2] = {40, 1u << 19};
     for (int m = 0; m < 2; ++m) {
-        pm_knn_options o = {ks[m], 0.5f, (pm_knn_mode)m, 0, count_hook, &h};
+        pm_knn_options o = {ks[m], 0.5f, (pm_knn_mode)m, 0, count_hook, &h, 0};
         pm_knn_stats st;
         memset(h.prev, 0, nq * sizeof *h.prev);
         h.calls = 0;
@@ -528,13 +543,13 @@ static void test_pass_hook(fixture *fx)
               "mode %d: failing hook: %u calls", m, h.calls);
     }
     /* the search runs again normally after a failed hook */
-    pm_knn_options plain = {40, 0.5f, PM_KNN_ATLEAST, 0, NULL, NULL};
+    pm_knn_options plain = {40, 0.5f, PM_KNN_ATLEAST, 0, NULL, NULL, 0};
     CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, h.results, &plain, NULL));
     CHECK_OK(ctx, sluice_stream_download(h.results, h.now, nq, NULL));
     size_t differ = 0;
     CHECK_OK(ctx,
              pm_knn_query(fx->knn, fx->grid, sp, sq, nq, h.results,
-                          &(pm_knn_options){40, 0.5f, PM_KNN_ATLEAST, 0, count_hook, &h}, NULL));
+                          &(pm_knn_options){40, 0.5f, PM_KNN_ATLEAST, 0, count_hook, &h, 0}, NULL));
     CHECK_OK(ctx, sluice_stream_download(h.results, fin, nq, NULL));
     for (size_t q = 0; q < nq; ++q)
         differ += memcmp(&fin[q], &h.now[q], sizeof *fin) != 0;
@@ -563,7 +578,7 @@ static void test_errors(fixture *fx)
     CHECK_OK(ctx, sluice_stream_upload(sq, qs, 4));
     sr_point_grid *fresh = NULL;
     CHECK_OK(ctx, sr_point_grid_create(ctx, &fresh));
-    pm_knn_options o = {8, 1.0f, PM_KNN_ATLEAST, 0, NULL, NULL};
+    pm_knn_options o = {8, 1.0f, PM_KNN_ATLEAST, 0, NULL, NULL, 0};
     CHECK(pm_knn_query(fx->knn, fresh, sp, sq, 4, sr, &o, NULL) == SLUICE_ERROR_INVALID_ARGUMENT,
           "grid not built");
     const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};

@@ -267,7 +267,7 @@ static void test_furnace(void)
             st = sluice_stream_upload(qs, q, Q);
         if (st == SLUICE_OK)
             st = sluice_stream_create(ctx, sizeof(pm_knn_result), Q, &rs);
-        pm_knn_options ko = {200, R, PM_KNN_ATLEAST, 1, NULL, NULL};
+        pm_knn_options ko = {200, R, PM_KNN_ATLEAST, 1, NULL, NULL, 0};
         if (st == SLUICE_OK)
             st = pm_knn_query(knn, g, photons, qs, Q, rs, &ko, NULL);
         if (st == SLUICE_OK)

@@ -238,6 +238,9 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
     p->max_r2 = o->max_radius * o->max_radius;
     p->normal_filter = o->normal_filter ? 1u : 0u;
     p->index_cap = cap;
+    p->shells_per_pass = o->shells_per_pass == PM_KNN_ALL_SHELLS
+                             ? 0u
+                             : (o->shells_per_pass ? o->shells_per_pass : 1u);
 }
 
 static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,

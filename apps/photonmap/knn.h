@@ -82,7 +82,14 @@ typedef struct pm_knn_options {
                                  query's normal faces (dot(n, d) < 0) */
     pm_knn_pass_fn on_pass; /**< NULL, or called after every pass */
     void *on_pass_user;     /**< passed to on_pass */
+    uint32_t shells_per_pass; /**< shells holding photons each pass explores per
+                                   query: 0 or 1 (Purcell's one), N, or
+                                   PM_KNN_ALL_SHELLS (one pass: the search runs
+                                   to its end in one launch) */
 } pm_knn_options;
+
+/** pm_knn_options.shells_per_pass: every shell in one pass. */
+#define PM_KNN_ALL_SHELLS UINT32_MAX
 
 /** Statistics of the last query call. */
 typedef struct pm_knn_stats {

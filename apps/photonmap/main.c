@@ -38,6 +38,8 @@ static void usage(FILE *out)
           "                           ring), 25x25x50 (cornell)\n"
           "  --knn atleast|exact      Purcell's at-least-k search or Jensen's k nearest\n"
           "                           (default atleast)\n"
+          "  --shells-per-pass N|all  kNN shells holding photons each pass explores per\n"
+          "                           estimate (default 1, Purcell's; all: one pass)\n"
           "  --spp N                  samples per pixel (default 1; with --time and no\n"
           "                           --spp, as many as the time allows)\n"
           "  --light-samples N        shadow rays per area light and hit (default: the scene's)\n"
@@ -144,6 +146,11 @@ static int parse(int argc, char **argv, cli *c)
             if ((k = sr_cli_choice(v, (const char *const[]){"stream", "fused", NULL})) < 0)
                 return sr_cli_bad(PROG, a, v, "expected stream or fused");
             c->opt.tracer.exec = k ? RT_EXEC_FUSED : RT_EXEC_STREAM;
+        } else if (!strcmp(a, "--shells-per-pass")) {
+            if (!strcmp(v, "all"))
+                c->opt.shells_per_pass = PM_KNN_ALL_SHELLS;
+            else if (!sr_cli_uint(v, 1, 1u << 20, &c->opt.shells_per_pass))
+                return sr_cli_bad(PROG, a, v, "expected all or a whole number from 1 to 1048576");
         } else if (!strcmp(a, "--pass-images")) {
             if ((k = sr_cli_image_path(PROG, a, v)) != 0)
                 return k;

@@ -60,6 +60,7 @@ pm_options pm_options_default(void)
     o.map = SR_POINT_GRID_COUNT;
     o.slots = 256;
     o.knn = PM_KNN_ATLEAST;
+    o.shells_per_pass = 1;
     o.tracer = rt_tracer_options_default();
     return o;
 }
@@ -374,7 +375,8 @@ static sluice_status gather(void *user, sluice_stream *points, size_t n)
         st = sluice_kernel_launch(r->k_queries);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(r->queries, n);
-    pm_knn_options ko = {r->opt.k, r->max_radius, r->opt.knn, 1, NULL, NULL};
+    pm_knn_options ko = {r->opt.k, r->max_radius,         r->opt.knn, 1, NULL,
+                         NULL,     r->opt.shells_per_pass};
     if (r->opt.pass_image) {
         ko.on_pass = preview_pass;
         ko.on_pass_user = r;

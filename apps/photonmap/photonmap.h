@@ -44,6 +44,7 @@ typedef struct pm_options {
     uint32_t slots;               /**< stencil: places per cell (m^2; Purcell's m = 16) */
     uint32_t grid_dims[3];        /**< photon-map grid; all 0: chosen from count and radius */
     pm_knn_mode knn;              /**< atleast (Purcell) or exact (Jensen) */
+    uint32_t shells_per_pass;     /**< kNN shells per pass (pm_knn_options) */
     rt_tracer_options tracer;     /**< the tracer's options */
     pm_pass_image_fn pass_image;  /**< NULL, or called after every kNN pass */
     void *pass_image_user;        /**< passed to pass_image */

@@ -63,39 +63,49 @@ void pm_photons_destroy(pm_photons *p)
 }
 
 /* The bounding sphere of the mirror and glass triangles (centre of their
- * box, half its diagonal, padded); radius 0 when there are none. */
+ * box, the farthest vertex from it, padded); radius 0 when there are none. */
 static void specular_sphere(const sr_scene *sc, float out[4])
 {
     const sr_material *mats = sr_scene_materials(sc);
     const uint32_t *tm = sr_scene_triangle_materials(sc);
     const uint32_t *idx = sr_scene_indices(sc);
     const float *pos = sr_scene_positions(sc);
+    size_t nt = sr_scene_triangle_count(sc);
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     size_t found = 0;
-    for (size_t t = 0; t < sr_scene_triangle_count(sc); ++t) {
-        sr_material_kind k = mats[tm[t]].kind;
-        if (k != SR_MATERIAL_MIRROR && k != SR_MATERIAL_GLASS)
-            continue;
-        ++found;
-        for (int v = 0; v < 3; ++v)
-            for (int a = 0; a < 3; ++a) {
-                double x = pos[3 * (size_t)idx[3 * t + (size_t)v] + (size_t)a];
-                lo[a] = fmin(lo[a], x);
-                hi[a] = fmax(hi[a], x);
+    for (int pass = 0; pass < 2; ++pass) {
+        /* pass 0: the box's centre; pass 1: the farthest vertex from it
+         * (tight for a sphere, where the box's half-diagonal is sqrt 3
+         * times too large and the cone three times too wide) */
+        double c[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
+        double r2 = 0.0, mag2 = 0.0;
+        for (size_t t = 0; t < nt; ++t) {
+            sr_material_kind k = mats[tm[t]].kind;
+            if (k != SR_MATERIAL_MIRROR && k != SR_MATERIAL_GLASS)
+                continue;
+            found += pass == 0;
+            for (int v = 0; v < 3; ++v) {
+                const float *p = pos + 3 * (size_t)idx[3 * t + (size_t)v];
+                double d2 = 0.0;
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = fmin(lo[a], p[a]);
+                    hi[a] = fmax(hi[a], p[a]);
+                    d2 += (p[a] - c[a]) * (p[a] - c[a]);
+                    mag2 = fmax(mag2, (double)p[a] * p[a]);
+                }
+                r2 = fmax(r2, d2);
             }
+        }
+        memset(out, 0, 4 * sizeof *out);
+        if (!found)
+            return;
+        if (pass == 1) {
+            for (int a = 0; a < 3; ++a)
+                out[a] = (float)c[a];
+            /* float rounding of the centre must not leave a vertex outside */
+            out[3] = (float)(sqrt(r2) * (1.0 + 1e-5) + 1e-6 * sqrt(3.0 * mag2));
+        }
     }
-    memset(out, 0, 4 * sizeof *out);
-    if (!found)
-        return;
-    double r2 = 0.0;
-    for (int a = 0; a < 3; ++a) {
-        out[a] = (float)(0.5 * (lo[a] + hi[a]));
-        r2 += 0.25 * (hi[a] - lo[a]) * (hi[a] - lo[a]);
-    }
-    /* float rounding of the centre must not leave a corner outside */
-    out[3] = (float)(sqrt(r2) * (1.0 + 1e-5) +
-                     1e-6 * sqrt(lo[0] * lo[0] + hi[0] * hi[0] + lo[1] * lo[1] + hi[1] * hi[1] +
-                                 lo[2] * lo[2] + hi[2] * hi[2]));
 }
 
 static double luminance(const float c[3])

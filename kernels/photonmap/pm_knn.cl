@@ -13,19 +13,20 @@
  * outputs, since an emitting body runs twice. */
 #include "sluice.cl"
 
-/* Squared distance from x to the slab of cell j of an axis of n cells,
- * shrunk by the margin. The boundary cells reach to infinity: points
+/* Squared distance from x to the slab of cells j0 .. j1 of an axis of n
+ * cells, shrunk by the margin. The boundary cells reach to infinity: points
  * outside the box are clamped into them. */
-static inline float pm_gap2(float x, int j, int n, float lo, float cell, float margin)
+static inline float pm_gap2_range(float x, int j0, int j1, int n, float lo, float cell,
+                                  float margin)
 {
     float gap = 0.0f;
-    if (j > 0) {
-        float l = lo + (float)j * cell;
+    if (j0 > 0) {
+        float l = lo + (float)j0 * cell;
         if (x < l)
             gap = l - x;
     }
-    if (j < n - 1) {
-        float h = lo + (float)(j + 1) * cell;
+    if (j1 < n - 1) {
+        float h = lo + (float)(j1 + 1) * cell;
         if (x > h)
             gap = x - h;
     }
@@ -261,26 +262,41 @@ __kernel void pm_knn_init(SLUICE_PARAMS, global pm_knn_result *results, global u
     }
 }
 
-/* Scans the cells [b0, b1] (inclusive, within the grid) row by row along x:
- * a row's cells are one run of photons, trimmed to the cells within reach of
- * the bound; an empty row costs two reads. */
+/* Most boxes pending in pm_scan_box: each split halves a side of at most
+ * 2^21 cells, and the stack holds one box per split level plus one. */
+#define PM_BOX_STACK 48
+
+/* Scans the cells [b0, b1] (inclusive, within the grid) as runs of photons
+ * along x. The box is split in halves across y and z, nearer half first,
+ * until it is one row; a part without photons (by the summed counts) or out
+ * of reach of the bound is dropped whole, so a face with few photons costs
+ * about a split path per photon-holding row, not a visit per row. A row's
+ * cells are one run, trimmed to the cells within reach. */
 static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const int *n,
                                const pg_params *g, const pm_knn_params *p, uint exact,
                                global const pm_photon *map, global const uint *map_start,
-                               global const uint *cell_count, global uint *indices)
+                               global const uint *cell_count, global const uint *sat,
+                               global uint *indices)
 {
-    for (int z = b0[2]; z <= b1[2]; ++z) {
-        float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2]);
-        if (gz > pm_bound(st, p, exact))
+    int stack[PM_BOX_STACK][4]; /* y0 y1 z0 z1 */
+    int top = 0;
+    stack[0][0] = b0[1];
+    stack[0][1] = b1[1];
+    stack[0][2] = b0[2];
+    stack[0][3] = b1[2];
+    top = 1;
+    while (top > 0) {
+        --top;
+        int y0 = stack[top][0], y1 = stack[top][1], z0 = stack[top][2], z1 = stack[top][3];
+        float gyz = pm_gap2_range(st->py, y0, y1, n[1], g->lo[1], g->cell[1], p->margin[1]) +
+                    pm_gap2_range(st->pz, z0, z1, n[2], g->lo[2], g->cell[2], p->margin[2]);
+        float t = pm_bound(st, p, exact) - gyz;
+        if (t < 0.0f)
             continue;
-        for (int y = b0[1]; y <= b1[1]; ++y) {
-            uint row = (uint)n[0] * ((uint)y + (uint)n[1] * (uint)z);
+        if (y0 == y1 && z0 == z1) {
+            uint row = (uint)n[0] * ((uint)y0 + (uint)n[1] * (uint)z0);
             uint last = row + (uint)b1[0];
             if (map_start[row + (uint)b0[0]] == map_start[last] + cell_count[last])
-                continue;
-            float t = pm_bound(st, p, exact) - gz -
-                      pm_gap2(st->py, y, n[1], g->lo[1], g->cell[1], p->margin[1]);
-            if (t < 0.0f)
                 continue;
             int xa = b0[0], xb = b1[0];
             pm_trim(st->px, t, g->lo[0], g->inv_cell[0], g->dims[0], p->margin[0], &xa, &xb);
@@ -289,6 +305,26 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
             pm_scan_run(st, map_start[row + (uint)xa],
                         map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, exact, map,
                         indices);
+            continue;
+        }
+        if (pm_box(sat, n, b0[0], b1[0], y0, y1, z0, z1) == 0u)
+            continue;
+        /* split the longer side; the half holding the query's side goes on
+         * top, so it is scanned first and the bound tightens sooner */
+        int across_z = z1 - z0 >= y1 - y0;
+        int c0 = across_z ? z0 : y0, c1 = across_z ? z1 : y1, mid = c0 + (c1 - c0) / 2;
+        float q = across_z ? st->pz : st->py;
+        float split = across_z ? g->lo[2] + (float)(mid + 1) * g->cell[2]
+                               : g->lo[1] + (float)(mid + 1) * g->cell[1];
+        int near_low = q < split;
+        for (int h = 0; h < 2; ++h) {
+            int low = near_low ? h == 1 : h == 0; /* far half pushed first */
+            int a0 = low ? c0 : mid + 1, a1 = low ? mid : c1;
+            stack[top][0] = across_z ? y0 : a0;
+            stack[top][1] = across_z ? y1 : a1;
+            stack[top][2] = across_z ? a0 : z0;
+            stack[top][3] = across_z ? a1 : z1;
+            ++top;
         }
     }
 }
@@ -331,64 +367,72 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
             n[a] = (int)g.dims[a];
             qc[a] = (int)pg_axis(qp[a], g.lo[a], g.inv_cell[a], g.dims[a]);
         }
-        int s = (int)r.shells, covered = 0;
-        int full = exact ? st.count == p.k : st.count >= p.k;
-        float reach = exact ? (st.count ? st.hd[0] : 0.0f) : st.r2;
-        /* Shells without photons change nothing: the search jumps to the
-         * first shell u >= s that holds photons or at which it would have
-         * ended, by the summed counts (Purcell explores every shell, one a
-         * pass; the estimate is the same, in fewer passes). */
-        uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n) : 0u;
-        uint at_s = pm_cube_count(sat, qc, s, n);
-        if (at_s == before) {
-            int lo = s, hi = 0;
-            for (int a = 0; a < 3; ++a)
-                hi = max(hi, max(qc[a], n[a] - 1 - qc[a]));
-            hi = max(hi, lo);
-            while (lo < hi) {
-                int mid = lo + (hi - lo) / 2, cov;
-                float dm = pm_cube_d2(qp, qc, mid, n, &g, &p, &cov);
-                if (pm_cube_count(sat, qc, mid, n) != before || cov || dm >= p.max_r2 ||
-                    (full && dm >= reach))
-                    hi = mid;
-                else
-                    lo = mid + 1;
-            }
-            s = lo;
-            at_s = pm_cube_count(sat, qc, s, n);
-        }
-        if (at_s != before) {
-            /* the shell's six faces as boxes of cells, each cell once:
-             * the faces across x whole, those across y without the x
-             * faces' cells, those across z without either; a face
-             * without photons (by the summed counts) is skipped */
-            int lo[3], hi[3], in_lo[3], in_hi[3];
-            for (int a = 0; a < 3; ++a) {
-                lo[a] = max(qc[a] - s, 0);
-                hi[a] = min(qc[a] + s, n[a] - 1);
-                in_lo[a] = max(qc[a] - s + 1, 0);
-                in_hi[a] = min(qc[a] + s - 1, n[a] - 1);
-            }
-            for (int side = 0; side < 6; ++side) {
-                int a = side >> 1, at = (side & 1) ? qc[a] + s : qc[a] - s;
-                if (at < 0 || at >= n[a] || ((side & 1) && s == 0))
-                    continue;
-                int b0[3], b1[3];
-                for (int c = 0; c < 3; ++c) {
-                    /* axes before a: inside the faces already done */
-                    b0[c] = c == a ? at : (c > a ? lo[c] : in_lo[c]);
-                    b1[c] = c == a ? at : (c > a ? hi[c] : in_hi[c]);
+        int s = (int)r.shells, covered = 0, done = 0, full = 0;
+        float reach = 0.0f;
+        /* up to shells_per_pass shells that hold photons (Purcell: one) */
+        for (uint step = 0u; !done && (p.shells_per_pass == 0u || step < p.shells_per_pass);
+             ++step) {
+            if (step)
+                ++s;
+            full = exact ? st.count == p.k : st.count >= p.k;
+            reach = exact ? (st.count ? st.hd[0] : 0.0f) : st.r2;
+            /* Shells without photons change nothing: the search jumps to the
+             * first shell u >= s that holds photons or at which it would have
+             * ended, by the summed counts (Purcell explores every shell, one a
+             * pass; the estimate is the same, in fewer passes). */
+            uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n) : 0u;
+            uint at_s = pm_cube_count(sat, qc, s, n);
+            if (at_s == before) {
+                int lo = s, hi = 0;
+                for (int a = 0; a < 3; ++a)
+                    hi = max(hi, max(qc[a], n[a] - 1 - qc[a]));
+                hi = max(hi, lo);
+                while (lo < hi) {
+                    int mid = lo + (hi - lo) / 2, cov;
+                    float dm = pm_cube_d2(qp, qc, mid, n, &g, &p, &cov);
+                    if (pm_cube_count(sat, qc, mid, n) != before || cov || dm >= p.max_r2 ||
+                        (full && dm >= reach))
+                        hi = mid;
+                    else
+                        lo = mid + 1;
                 }
-                if (b0[0] > b1[0] || b0[1] > b1[1] || b0[2] > b1[2] ||
-                    pm_box(sat, n, b0[0], b1[0], b0[1], b1[1], b0[2], b1[2]) == 0u)
-                    continue;
-                pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices);
+                s = lo;
+                at_s = pm_cube_count(sat, qc, s, n);
             }
+            if (at_s != before) {
+                /* the shell's six faces as boxes of cells, each cell once:
+                 * the faces across x whole, those across y without the x
+                 * faces' cells, those across z without either; a face
+                 * without photons (by the summed counts) is skipped */
+                int lo[3], hi[3], in_lo[3], in_hi[3];
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = max(qc[a] - s, 0);
+                    hi[a] = min(qc[a] + s, n[a] - 1);
+                    in_lo[a] = max(qc[a] - s + 1, 0);
+                    in_hi[a] = min(qc[a] + s - 1, n[a] - 1);
+                }
+                for (int side = 0; side < 6; ++side) {
+                    int a = side >> 1, at = (side & 1) ? qc[a] + s : qc[a] - s;
+                    if (at < 0 || at >= n[a] || ((side & 1) && s == 0))
+                        continue;
+                    int b0[3], b1[3];
+                    for (int c = 0; c < 3; ++c) {
+                        /* axes before a: inside the faces already done */
+                        b0[c] = c == a ? at : (c > a ? lo[c] : in_lo[c]);
+                        b1[c] = c == a ? at : (c > a ? hi[c] : in_hi[c]);
+                    }
+                    if (b0[0] > b1[0] || b0[1] > b1[1] || b0[2] > b1[2] ||
+                        pm_box(sat, n, b0[0], b1[0], b0[1], b1[1], b0[2], b1[2]) == 0u)
+                        continue;
+                    pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, sat,
+                                indices);
+                }
+            }
+            float ds2 = pm_cube_d2(qp, qc, s, n, &g, &p, &covered);
+            full = exact ? st.count == p.k : st.count >= p.k;
+            reach = exact ? (st.count ? st.hd[0] : 0.0f) : st.r2;
+            done = covered || ds2 >= p.max_r2 || (full && ds2 >= reach);
         }
-        float ds2 = pm_cube_d2(qp, qc, s, n, &g, &p, &covered);
-        full = exact ? st.count == p.k : st.count >= p.k;
-        reach = exact ? (st.count ? st.hd[0] : 0.0f) : st.r2;
-        int done = covered || ds2 >= p.max_r2 || (full && ds2 >= reach);
         r.shells = (uint)s + 1u;
         r.count = st.count;
         r.flags = st.flags;

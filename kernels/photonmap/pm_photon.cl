@@ -25,9 +25,10 @@
 #include "sluice.cl"
 
 /* Emits photon i of the batch: from an area light (a point by area, a
- * cosine-weighted direction about its normal: flux Le pi A / p_area) or a
- * point light (uniform direction, or toward the mirrors and glass: flux
- * I n_point / ((1 - p_area) pdf)). */
+ * cosine-weighted direction about its normal or one toward the mirrors and
+ * glass: flux Le cos A / (p_area pdf), Le pi A / p_area without them) or a
+ * point light (a uniform direction or one toward the mirrors and glass:
+ * flux I n_point / ((1 - p_area) pdf)). */
 __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv,
                       global const uint *tri_mat, global const rt_material *mats,
                       global const rt_point_light *plights, global const uint *area_tris,
@@ -37,13 +38,22 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
         uint key = rt_key(rt_key(a.seed, 0x9407u), a.base + i);
         float3 o, d, power;
         float3 off;
-        if (a.area_lights && rt_rand(key, 0u) < a.area_prob) {
-            float3 q, ln;
+        /* Jensen's projection map, as a mixture: a share of the photons go
+         * into the cone from the emission point to the mirrors' and glass's
+         * bounding sphere (where caustics start), the rest as the light
+         * emits; the power divides by the mixture's pdf, so nothing is lost
+         * or counted twice. A point inside the sphere emits as the light
+         * does. */
+        float3 to;
+        float ps = 0.0f, omc = 0.0f;
+        int area = a.area_lights && rt_rand(key, 0u) < a.area_prob;
+        float3 ln = (float3)(0.0f), le;
+        if (area) {
+            float3 q;
             uint lt = rt_area_light_sample(rt_rand(key, 1u), rt_rand(key, 2u), rt_rand(key, 3u),
                                            a.area_lights, area_tris, area_cdf, tv, &q, &ln);
             rt_material m = mats[tri_mat[lt]];
-            d = rt_cosine_dir(ln, rt_rand(key, 4u), rt_rand(key, 5u));
-            power = (float3)(m.er, m.eg, m.eb) * (RT_PI * a.area_total / a.area_prob);
+            le = (float3)(m.er, m.eg, m.eb);
             o = q;
             off = ln * a.scene_eps;
         } else {
@@ -51,33 +61,36 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
             rt_point_light pl = plights[l];
             o = (float3)(pl.px, pl.py, pl.pz);
             off = (float3)(0.0f);
-            /* Jensen's projection map, as a mixture: a share of the photons
-             * go into the cone of the mirrors' and glass's bounding sphere
-             * (where caustics start), the rest uniformly; the power divides
-             * by the mixture's pdf, so nothing is lost or counted twice. A
-             * light inside the sphere emits uniformly. */
-            float3 to = (float3)(a.spec_x, a.spec_y, a.spec_z) - o;
-            float dist2 = dot(to, to), r2 = a.spec_r * a.spec_r;
-            float ps = a.spec_prob > 0.0f && dist2 > r2 ? a.spec_prob : 0.0f;
-            float omc = 0.0f, pdf = 1.0f / (4.0f * RT_PI);
-            int in_cone = 0;
-            if (ps > 0.0f) {
-                float x = r2 / dist2;
-                omc = x / (1.0f + sqrt(1.0f - x));
-                float3 axis = to * rsqrt(dist2);
-                if (rt_rand(key, 4u) < ps) {
-                    d = rt_cone_dir(axis, omc, rt_rand(key, 2u), rt_rand(key, 3u));
-                    in_cone = 1;
-                } else {
-                    d = rt_uniform_sphere(rt_rand(key, 2u), rt_rand(key, 3u));
-                    in_cone = dot(d, axis) >= 1.0f - omc;
-                }
-                pdf = (1.0f - ps) / (4.0f * RT_PI) + (in_cone ? ps / (2.0f * RT_PI * omc) : 0.0f);
-            } else {
-                d = rt_uniform_sphere(rt_rand(key, 2u), rt_rand(key, 3u));
-            }
-            power = (float3)(pl.ir, pl.ig, pl.ib) *
-                    ((float)a.point_lights / ((1.0f - a.area_prob) * pdf));
+            le = (float3)(pl.ir, pl.ig, pl.ib);
+        }
+        to = (float3)(a.spec_x, a.spec_y, a.spec_z) - o;
+        float dist2 = dot(to, to), r2 = a.spec_r * a.spec_r;
+        float3 axis = (float3)(0.0f, 0.0f, 1.0f);
+        if (a.spec_prob > 0.0f && dist2 > r2) {
+            float x = r2 / dist2;
+            omc = x / (1.0f + sqrt(1.0f - x)); /* 1 - cos of the half-angle */
+            axis = to * rsqrt(dist2);
+            /* an area light's cone must reach its front side */
+            ps = !area || dot(axis, ln) > -sqrt(x) ? a.spec_prob : 0.0f;
+        }
+        int in_cone = 0;
+        if (ps > 0.0f && rt_rand(key, 4u) < ps) {
+            d = rt_cone_dir(axis, omc, rt_rand(key, 5u), rt_rand(key, 6u));
+            in_cone = 1;
+        } else {
+            d = area ? rt_cosine_dir(ln, rt_rand(key, 5u), rt_rand(key, 6u))
+                     : rt_uniform_sphere(rt_rand(key, 5u), rt_rand(key, 6u));
+            in_cone = ps > 0.0f && dot(d, axis) >= 1.0f - omc;
+        }
+        float cone_pdf = in_cone ? ps / (2.0f * RT_PI * omc) : 0.0f;
+        if (area) {
+            /* Le cos A_total / (p_area pdf): Le pi A / p_area without the cone */
+            float c = fmax(dot(d, ln), 0.0f);
+            float pdf = (1.0f - ps) * c * (1.0f / RT_PI) + cone_pdf;
+            power = pdf > 0.0f ? le * (c * a.area_total / (a.area_prob * pdf)) : (float3)(0.0f);
+        } else {
+            float pdf = (1.0f - ps) / (4.0f * RT_PI) + cone_pdf;
+            power = le * ((float)a.point_lights / ((1.0f - a.area_prob) * pdf));
         }
         /* the flight gets a key of its own: the bounce reads dimensions 1-4,
          * which emission used to choose this photon's light and direction */

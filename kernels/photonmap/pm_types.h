@@ -62,6 +62,7 @@ typedef struct pm_knn_params {
     float max_r2;         /* squared maximum radius */
     rt_u32 normal_filter; /* non-zero: only photons with dot(n, d) < 0 */
     rt_u32 index_cap;     /* places per query in the index list (0: none) */
+    rt_u32 shells_per_pass; /* shells holding photons a pass explores (0: all) */
     float margin[3];      /* per axis: how much the shell distances are shrunk
                              so that rounding in the cell function never makes
                              a shell look farther than a photon in it */
@@ -79,7 +80,7 @@ typedef struct pm_emit_args {
     float area_prob;  /* probability of leaving an area light */
     float area_total; /* total emissive area */
     float scene_eps;
-    float spec_prob;              /* share of a point light's photons sent
+    float spec_prob;              /* share of the photons sent
                                      toward the mirrors and glass */
     float spec_x, spec_y, spec_z; /* their bounding sphere: centre */
     float spec_r;                 /* and radius */
