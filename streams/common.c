@@ -15,9 +15,10 @@ sluice_status sl_check_u32_stream(sluice_context *ctx, sluice_stream *s, const c
                        what, s->record_size);
     if (!n)
         return SLUICE_OK;
-    sluice_status st = sluice_stream_length(s, n);
-    if (st == SLUICE_OK && *n > s->capacity)
-        *n = s->capacity; /* an overflowed output: only the stored records */
+    char prefix[96];
+    snprintf(prefix, sizeof prefix, "%s: %s ", fn, what);
+    sluice_status st = sl_stream_length(s, prefix); /* an overflowed stream is an error */
+    *n = s->len;
     return st;
 }
 
@@ -33,10 +34,4 @@ sluice_status sl_set_args(sluice_context *ctx, cl_kernel k, const char *name, un
         }
     }
     return SLUICE_OK;
-}
-
-void sl_set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *err)
-{
-    if (*err == CL_SUCCESS)
-        *err = clSetKernelArg(k, i, size, value);
 }

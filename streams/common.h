@@ -6,8 +6,8 @@
 
 /* Checks a uint32 stream argument of `fn`: `s` must belong to `ctx` and hold
  * 4-byte records; `what` names the argument in the error message. When `n`
- * is not NULL, also returns the stream's length in *n, capped at its
- * capacity (an overflowed output: only the stored records count). */
+ * is not NULL, also returns the stream's length in *n; a stream that
+ * overflowed (its length past its capacity) is SLUICE_ERROR_OVERFLOW. */
 sluice_status sl_check_u32_stream(sluice_context *ctx, sluice_stream *s, const char *fn,
                                   const char *what, size_t *n);
 
@@ -15,10 +15,6 @@ sluice_status sl_check_u32_stream(sluice_context *ctx, sluice_stream *s, const c
  * message) from `sizes` and `values`; stops at the first failure. */
 sluice_status sl_set_args(sluice_context *ctx, cl_kernel k, const char *name, unsigned count,
                           const size_t *sizes, const void *const *values);
-
-/* Sets argument `i` of `k` unless `*err` already holds an error, and keeps
- * the first error in `*err`. */
-void sl_set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *err);
 
 /* Argument lists for sl_set_args: sizes, then pointers to the values. */
 #define SIZES(...)                                                                                 \
