@@ -11,6 +11,13 @@
 sluice_status sl_check_u32_stream(sluice_context *ctx, sluice_stream *s, const char *fn,
                                   const char *what, size_t *n);
 
+/* Reads the 4-byte `value` at index `at` of `buf` and the overflow flag
+ * after it in one read (scan.cl and reduce.cl write both). A set flag means
+ * that the input `in` overflowed: SLUICE_ERROR_OVERFLOW, its message starting
+ * with `fn`, and `value` is not written. `what` names the value read. */
+sluice_status sl_read_flagged(sluice_context *ctx, cl_mem buf, size_t at, void *value,
+                              sluice_stream *in, const char *fn, const char *what);
+
 /* Sets arguments 0 .. count-1 of kernel `k` (named `name` in the error
  * message) from `sizes` and `values`; stops at the first failure. */
 sluice_status sl_set_args(sluice_context *ctx, cl_kernel k, const char *name, unsigned count,

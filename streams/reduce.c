@@ -57,8 +57,7 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
                        in->record_size);
 
     /* The length: known on the host, or read by the kernels on the device. */
-    static const char in_prefix[] = "sluice_reduce: the input ";
-    sluice_status st = sl_stream_check_known(in, in_prefix);
+    sluice_status st = sl_stream_check_known(in, "sluice_reduce: the input ");
     if (st != SLUICE_OK)
         return st;
     cl_uint in_var = in->var, limit = (cl_uint)in->capacity, n_fixed;
@@ -113,17 +112,8 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
         st = sl_enqueue_raw(ctx, part, part_name, global, REDUCE_LOCAL);
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, final, final_name, 1, 1);
-    if (st == SLUICE_OK) {
-        uint32_t back[2]; /* the result and the overflow flag, in one read */
-        err = clEnqueueReadBuffer(ctx->queue, parts, CL_TRUE, global * 4, sizeof back, back, 0,
-                                  NULL, NULL);
-        if (err != CL_SUCCESS)
-            st = sl_cl_fail(ctx, err, "sluice_reduce: reading the result");
-        else if (back[1])
-            st = sl_stream_overflowed(in, in_prefix);
-        else
-            memcpy(result, back, 4);
-    }
+    if (st == SLUICE_OK)
+        st = sl_read_flagged(ctx, parts, global, result, in, "sluice_reduce", "result");
     if (parts)
         clReleaseMemObject(parts);
     if (part)

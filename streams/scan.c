@@ -156,17 +156,8 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
     }
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, k[2], names[2], si.global, SCAN_LOCAL);
-    if (st == SLUICE_OK && total) {
-        uint32_t back[2]; /* the total and the overflow flag, in one read */
-        err = clEnqueueReadBuffer(ctx->queue, sums, CL_TRUE, si.global * 4, sizeof back, back, 0,
-                                  NULL, NULL);
-        if (err != CL_SUCCESS)
-            st = sl_cl_fail(ctx, err, "sluice_scan: reading the total");
-        else if (back[1])
-            st = sl_stream_overflowed(in, in_prefix);
-        else
-            memcpy(total, back, 4);
-    }
+    if (st == SLUICE_OK && total)
+        st = sl_read_flagged(ctx, sums, si.global, total, in, "sluice_scan", "total");
     if (sums)
         clReleaseMemObject(sums);
     for (int i = 0; i < 3; ++i)
