@@ -89,8 +89,10 @@ typedef struct sluice_launch_ {
     uint prof_var;     /* profile variables (records in, out[8]) or SLUICE_NONE */
     uint stride;       /* chunks + 1: scratch row length per ordered output */
     uint in_cap;       /* input capacity: a device length past it (overflow) voids the launch */
+    uint n_map;        /* mapped outputs whose length the launch sets (n_fixed is SLUICE_NONE) */
     uint out_var[SLUICE_MAX_OUTPUTS]; /* output lengths in the pool */
     uint out_cap[SLUICE_MAX_OUTPUTS]; /* output capacities (records) */
+    uint map_var[SLUICE_MAX_OUTPUTS]; /* the lengths of those mapped outputs */
 } sluice_launch_;
 
 /* Per-work-item state of one launch. */
@@ -104,14 +106,23 @@ typedef struct sluice_state_ {
     uint ctr[SLUICE_MAX_COUNTERS];
 } sluice_state_;
 
-/* The input overflowed: the outputs and the counters are void. Work-item 0
- * of the last launch (not the count launch of ordered outputs) marks them;
- * no work-item touches them otherwise, since no record is read. */
-inline void sluice_void_launch_(global uint *vars, const sluice_launch_ *L)
+/* Work-item 0 of a launch whose input length is on the device, in the last
+ * launch (not the count launch of ordered outputs): sets the mapped outputs'
+ * lengths to the input's `n`, or, when the input overflowed, makes the
+ * outputs, the mapped outputs and the counters void. No other work-item
+ * touches them: an overflowed input has no records to read. */
+inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint n)
 {
+    if (vars[L->in_var] <= L->in_cap) {
+        for (uint m = 0; m < L->n_map; ++m)
+            vars[L->map_var[m]] = n;
+        return;
+    }
     for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
         if ((L->out_mask >> k) & 1u)
             sluice_void_(vars, L->out_var[k], L->in_var);
+    for (uint m = 0; m < L->n_map; ++m)
+        sluice_void_(vars, L->map_var[m], L->in_var);
     if (L->counter_var != SLUICE_NONE)
         vars[L->counter_var + L->n_counters] =
             1u + (vars[L->in_var] == SLUICE_VOID_ ? vars[L->in_var + 1u] : L->in_var);
@@ -123,8 +134,8 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
     uint n = L->n_fixed;
     if (n == SLUICE_NONE) {
         n = sluice_stream_length_(vars, L->in_var, L->in_cap);
-        if (vars[L->in_var] > L->in_cap && L->mode != 1u && get_global_id(0) == 0)
-            sluice_void_launch_(vars, L);
+        if (L->mode != 1u && get_global_id(0) == 0)
+            sluice_set_lengths_(vars, L, n);
     }
     uint id = (uint)get_global_id(0);
     ulong b = (ulong)id * L->chunk;

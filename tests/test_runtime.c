@@ -53,6 +53,17 @@ static const char *kernels_src =
     "            SLUICE_EMIT_IF(0, out, in[i], in[i] < 100u);\n"
     "    }\n"
     "}\n"
+    /* Nine mapped outputs: one more than a launch sets the lengths of. */
+    "__kernel void fan9(SLUICE_PARAMS, global const uint *in, global uint *o0,\n"
+    "                   global uint *o1, global uint *o2, global uint *o3, global uint *o4,\n"
+    "                   global uint *o5, global uint *o6, global uint *o7, global uint *o8)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i) {\n"
+    "        uint x = in[i];\n"
+    "        o0[i] = x; o1[i] = x + 1u; o2[i] = x + 2u; o3[i] = x + 3u; o4[i] = x + 4u;\n"
+    "        o5[i] = x + 5u; o6[i] = x + 6u; o7[i] = x + 7u; o8[i] = x + 8u;\n"
+    "    }\n"
+    "}\n"
     /* Halves every value and keeps those still above 1: a shrinking loop. */
     "__kernel void halve(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
     "{\n"
@@ -498,6 +509,55 @@ static void test_loop(sluice_context *ctx, sluice_program *p)
     sluice_kernel_destroy(u.k);
 }
 
+/* Mapped outputs of an input whose length is on the device take its length,
+ * the ninth as well (set by a kernel of its own), and are void when it
+ * overflowed, even an input of capacity 0 (a launch over it is still
+ * queued). */
+static void test_mapped_lengths(sluice_context *ctx, sluice_program *p)
+{
+    const size_t n = 5000, cap = 3000;
+    sluice_kernel *fan = NULL, *h = NULL;
+    sluice_stream *o[9] = {NULL}, *src = NULL, *half = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "fan9", &fan));
+    CHECK_OK(ctx, sluice_kernel_create(p, "halve", &h));
+    for (unsigned j = 0; j < 9; ++j) {
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &o[j]));
+        CHECK_OK(ctx, sluice_kernel_set_stream(fan, 1 + j, o[j], 1));
+    }
+    for (int overflowed = 0; overflowed < 2; ++overflowed) {
+        /* check_fill emits n records: into a capacity of n, or of cap. */
+        CHECK_OK(ctx, check_overflowed(ctx, n, overflowed ? cap : n, 0, &src));
+        CHECK_OK(ctx, sluice_kernel_set_input(fan, 0, src));
+        CHECK_OK(ctx, sluice_kernel_launch(fan));
+        for (unsigned j = 0; j < 9; ++j) {
+            size_t len = 1;
+            sluice_status st = sluice_stream_length(o[j], &len);
+            if (overflowed)
+                CHECK(st == SLUICE_ERROR_OVERFLOW && len == 0 && check_overflow_named(ctx, n, cap),
+                      "mapped output %u of an overflowed input: %s", j, sluice_context_error(ctx));
+            else
+                CHECK(st == SLUICE_OK && len == n, "mapped output %u: %s, %zu", j,
+                      sluice_status_string(st), len);
+        }
+        sluice_stream_destroy(src);
+    }
+    CHECK_OK(ctx, check_overflowed(ctx, 5, 0, 0, &src));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, 10, &half));
+    CHECK_OK(ctx, sluice_kernel_set_input(h, 0, src));
+    CHECK_OK(ctx, sluice_kernel_set_output(h, 1, 0, half, SLUICE_ORDERED));
+    CHECK_OK(ctx, sluice_kernel_launch(h));
+    size_t len = 1;
+    CHECK(sluice_stream_length(half, &len) == SLUICE_ERROR_OVERFLOW && len == 0 &&
+              check_overflow_named(ctx, 5, 0),
+          "output of an overflowed input of capacity 0: %s", sluice_context_error(ctx));
+    sluice_stream_destroy(src);
+    sluice_stream_destroy(half);
+    for (unsigned j = 0; j < 9; ++j)
+        sluice_stream_destroy(o[j]);
+    sluice_kernel_destroy(fan);
+    sluice_kernel_destroy(h);
+}
+
 /* Overflow inside loops (issue 12): an output too small for a pass is an
  * error that stops the loop, whichever value the loop watches. */
 typedef struct overflow_user {
@@ -745,6 +805,7 @@ int main(void)
     test_multi_emit(ctx, p, SLUICE_UNORDERED);
     test_block_emit(ctx, p);
     test_loop(ctx, p);
+    test_mapped_lengths(ctx, p);
     test_loop_overflow(ctx, p, SLUICE_ORDERED);
     test_loop_overflow(ctx, p, SLUICE_UNORDERED);
     test_errors(ctx);

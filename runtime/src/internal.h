@@ -36,9 +36,10 @@ const char *sl_embedded_find(const char *name);
 /* Host mirror of sluice_launch_ in kernels/sluice.cl: same order, all cl_uint. */
 typedef struct sl_launch {
     cl_uint n_fixed, in_var, chunk, mode, first_pass, ordered_mask, out_mask;
-    cl_uint counter_var, n_counters, prof_var, stride, in_cap;
+    cl_uint counter_var, n_counters, prof_var, stride, in_cap, n_map;
     cl_uint out_var[SLUICE_MAX_OUTPUTS];
     cl_uint out_cap[SLUICE_MAX_OUTPUTS];
+    cl_uint map_var[SLUICE_MAX_OUTPUTS];
 } sl_launch;
 
 typedef struct sl_pending_event {
