@@ -9,14 +9,17 @@
  * and MAX use fmin/fmax: a NaN is ignored unless every record is NaN.
  *
  * The input length is `n_fixed` when the host knows it, otherwise the
- * device-side variable vars[in_var], clamped to `limit` (the capacity).
+ * device-side variable vars[in_var]; past `limit` (the capacity) the input
+ * overflowed: nothing is read and parts[m + 1] is set, so the host reports
+ * the overflow instead of a result.
  */
+#include "sluice.cl"
 
 #define REDUCE_NONE 0xffffffffu
 
 inline uint reduce_length_(global const uint *vars, uint in_var, uint n_fixed, uint limit)
 {
-    return n_fixed != REDUCE_NONE ? n_fixed : min(vars[in_var], limit);
+    return n_fixed != REDUCE_NONE ? n_fixed : sluice_stream_length_(vars, in_var, limit);
 }
 
 #define REDUCE_KERNELS(T, T4, NAME, IDENTITY, OP)                                                  \
@@ -34,6 +37,8 @@ inline uint reduce_length_(global const uint *vars, uint in_var, uint n_fixed, u
         for (; i < end; ++i)                                                                       \
             r = OP(r, in[i]);                                                                      \
         parts[get_global_id(0)] = r;                                                               \
+        if (get_global_id(0) == 0)                                                                 \
+            parts[get_global_size(0) + 1u] = (T)(n_fixed == REDUCE_NONE && vars[in_var] > limit);  \
     }                                                                                              \
                                                                                                    \
     __kernel void reduce_final_##NAME(global T *parts, uint m)                                     \

@@ -13,14 +13,17 @@
  * multiple of 4 records, so every chunk but the last is 16-byte aligned).
  *
  * The input length is `n_fixed` when the host knows it, otherwise the
- * device-side variable vars[in_var], clamped to `limit` (the capacity).
+ * device-side variable vars[in_var]; past `limit` (the capacity) the input
+ * overflowed: nothing is read, the output is made void (sluice.cl) and the
+ * flag after the total is set, so the overflow is reported, not truncated.
  */
+#include "sluice.cl"
 
 #define SCAN_NONE 0xffffffffu
 
 inline uint scan_length_(global const uint *vars, uint in_var, uint n_fixed, uint limit)
 {
-    return n_fixed != SCAN_NONE ? n_fixed : min(vars[in_var], limit);
+    return n_fixed != SCAN_NONE ? n_fixed : sluice_stream_length_(vars, in_var, limit);
 }
 
 /* The records [*begin, *end) of chunk `id`. */
@@ -47,7 +50,8 @@ inline void scan_range_(uint n, uint chunk, uint *begin, uint *end)
         sums[get_global_id(0)] = s;                                                                \
     }                                                                                              \
                                                                                                    \
-    /* One work-item: sums[0..m) becomes its exclusive scan, sums[m] the total. */                 \
+    /* One work-item: sums[0..m) becomes its exclusive scan, sums[m] the total,                    \
+     * sums[m + 1] is non-zero when the input overflowed. */                                       \
     __kernel void scan_chunks_##SUFFIX(global uint *vars, uint in_var, uint n_fixed, uint limit,   \
                                        uint out_var, global T *sums, uint m)                       \
     {                                                                                              \
@@ -60,7 +64,12 @@ inline void scan_range_(uint n, uint chunk, uint *begin, uint *end)
             s += c;                                                                                \
         }                                                                                          \
         sums[m] = s;                                                                               \
-        vars[out_var] = scan_length_(vars, in_var, n_fixed, limit);                                \
+        int overflowed = n_fixed == SCAN_NONE && vars[in_var] > limit;                             \
+        sums[m + 1u] = (T)(overflowed);                                                            \
+        if (overflowed)                                                                            \
+            sluice_void_(vars, out_var, in_var);                                                   \
+        else                                                                                       \
+            vars[out_var] = scan_length_(vars, in_var, n_fixed, limit);                            \
     }                                                                                              \
                                                                                                    \
     __kernel void scan_apply_##SUFFIX(global const uint *vars, uint in_var, uint n_fixed,          \

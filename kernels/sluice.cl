@@ -45,6 +45,35 @@
 #define SLUICE_MAX_COUNTERS 8
 #define SLUICE_NONE 0xffffffffu
 
+/* Overflow is an error, never a truncation. A stream's length lives in
+ * vars[var], and vars[var + 1] is its second variable. When a kernel emits
+ * past an output's capacity, the records that fit are written and the length
+ * goes on counting past the capacity: the host reports the overflow when it
+ * reads that length. A launch whose input length (on the device) is past the
+ * input's capacity reads no records and makes its outputs void: their length
+ * becomes SLUICE_VOID_ and their second variable the length variable of the
+ * stream that overflowed first, so an overflow is reported wherever the
+ * stream it spoiled is read (runtime/src/stream.c), however far downstream.
+ * The same holds for counters: their note (the variable after the last
+ * counter) gets 1 + that variable. */
+#define SLUICE_VOID_ 0xfffffffeu
+
+/* The length of the stream whose length is vars[var] and capacity `cap`, as
+ * a launch reads it: 0 when it overflowed (or is void). */
+inline uint sluice_stream_length_(global const uint *vars, uint var, uint cap)
+{
+    uint n = vars[var];
+    return n <= cap ? n : 0u;
+}
+
+/* Makes the stream whose length is vars[var] void, because it was written
+ * from the overflowed stream whose length is vars[from]. */
+inline void sluice_void_(global uint *vars, uint var, uint from)
+{
+    vars[var + 1u] = vars[from] == SLUICE_VOID_ ? vars[from + 1u] : from;
+    vars[var] = SLUICE_VOID_;
+}
+
 /* Launch parameters filled in by the host runtime (runtime/src/kernel.c keeps
  * the same layout). All fields are uint so host and device agree on layout. */
 typedef struct sluice_launch_ {
@@ -59,9 +88,11 @@ typedef struct sluice_launch_ {
     uint n_counters;   /* counters bound */
     uint prof_var;     /* profile variables (records in, out[8]) or SLUICE_NONE */
     uint stride;       /* chunks + 1: scratch row length per ordered output */
-    uint in_cap;       /* input capacity: a device length past it (overflow) is capped */
+    uint in_cap;       /* input capacity: a device length past it (overflow) voids the launch */
+    uint n_map;        /* mapped outputs whose length the launch sets (n_fixed is SLUICE_NONE) */
     uint out_var[SLUICE_MAX_OUTPUTS]; /* output lengths in the pool */
     uint out_cap[SLUICE_MAX_OUTPUTS]; /* output capacities (records) */
+    uint map_var[SLUICE_MAX_OUTPUTS]; /* the lengths of those mapped outputs */
 } sluice_launch_;
 
 /* Per-work-item state of one launch. */
@@ -75,10 +106,37 @@ typedef struct sluice_state_ {
     uint ctr[SLUICE_MAX_COUNTERS];
 } sluice_state_;
 
+/* Work-item 0 of a launch whose input length is on the device, in the last
+ * launch (not the count launch of ordered outputs): sets the mapped outputs'
+ * lengths to the input's `n`, or, when the input overflowed, makes the
+ * outputs, the mapped outputs and the counters void. No other work-item
+ * touches them: an overflowed input has no records to read. */
+inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint n)
+{
+    if (vars[L->in_var] <= L->in_cap) {
+        for (uint m = 0; m < L->n_map; ++m)
+            vars[L->map_var[m]] = n;
+        return;
+    }
+    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+        if ((L->out_mask >> k) & 1u)
+            sluice_void_(vars, L->out_var[k], L->in_var);
+    for (uint m = 0; m < L->n_map; ++m)
+        sluice_void_(vars, L->map_var[m], L->in_var);
+    if (L->counter_var != SLUICE_NONE)
+        vars[L->counter_var + L->n_counters] =
+            1u + (vars[L->in_var] == SLUICE_VOID_ ? vars[L->in_var + 1u] : L->in_var);
+}
+
 inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
                           const sluice_launch_ *L)
 {
-    uint n = L->n_fixed != SLUICE_NONE ? L->n_fixed : min(vars[L->in_var], L->in_cap);
+    uint n = L->n_fixed;
+    if (n == SLUICE_NONE) {
+        n = sluice_stream_length_(vars, L->in_var, L->in_cap);
+        if (L->mode != 1u && get_global_id(0) == 0)
+            sluice_set_lengths_(vars, L, n);
+    }
     uint id = (uint)get_global_id(0);
     ulong b = (ulong)id * L->chunk;
     s->chunk_id = id;
@@ -114,10 +172,15 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
                 if (ordered)
                     scratch[k * L->stride + s->chunk_id] = s->cnt[k];
             } else if (!ordered) {
-                /* One global atomic per chunk and output. */
-                uint p = s->cnt[k] ? atomic_add(&vars[L->out_var[k]], s->cnt[k]) : 0u;
+                /* One global atomic per chunk and output. A void output stays
+                 * void: nothing is appended to it. */
+                uint p = 0u, lim = 0u;
+                if (s->cnt[k] && vars[L->out_var[k]] != SLUICE_VOID_) {
+                    p = atomic_add(&vars[L->out_var[k]], s->cnt[k]);
+                    lim = (uint)min((ulong)p + s->cnt[k], (ulong)L->out_cap[k]);
+                }
                 s->pos[k] = p;
-                s->lim[k] = (uint)min((ulong)p + s->cnt[k], (ulong)L->out_cap[k]);
+                s->lim[k] = lim;
             }
         }
     } else {
@@ -300,7 +363,8 @@ inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, uint16
 
 /* The number of input records of this launch. */
 #define SLUICE_LENGTH                                                                              \
-    (sluice_L_.n_fixed != SLUICE_NONE ? sluice_L_.n_fixed                                          \
-                                      : min(sluice_vars_[sluice_L_.in_var], sluice_L_.in_cap))
+    (sluice_L_.n_fixed != SLUICE_NONE                                                              \
+         ? sluice_L_.n_fixed                                                                       \
+         : sluice_stream_length_(sluice_vars_, sluice_L_.in_var, sluice_L_.in_cap))
 
 #endif /* SLUICE_CL_INCLUDED */

@@ -29,10 +29,7 @@ static sluice_status prepare(sluice_context *ctx, const char *fn, sluice_stream 
         return sl_fail(ctx, SLUICE_ERROR_OVERFLOW,
                        "%s: start holds %zu records but %zu are needed (cell_count + 1)", fn,
                        start->capacity, (size_t)cell_count + 1);
-    st = sluice_stream_length(keys, n);
-    if (st == SLUICE_OK && *n > keys->capacity)
-        *n = keys->capacity;
-    return st;
+    return sl_check_u32_stream(ctx, keys, fn, "keys", n);
 }
 
 sluice_status sluice_cell_index_search(sluice_context *ctx, sluice_stream *sorted_keys,

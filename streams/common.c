@@ -2,6 +2,7 @@
 #include "common.h"
 
 #include <stdio.h>
+#include <string.h>
 
 sluice_status sl_check_u32_stream(sluice_context *ctx, sluice_stream *s, const char *fn,
                                   const char *what, size_t *n)
@@ -15,10 +16,30 @@ sluice_status sl_check_u32_stream(sluice_context *ctx, sluice_stream *s, const c
                        what, s->record_size);
     if (!n)
         return SLUICE_OK;
-    sluice_status st = sluice_stream_length(s, n);
-    if (st == SLUICE_OK && *n > s->capacity)
-        *n = s->capacity; /* an overflowed output: only the stored records */
+    char prefix[96];
+    snprintf(prefix, sizeof prefix, "%s: %s ", fn, what);
+    sluice_status st = sl_stream_length(s, prefix); /* an overflowed stream is an error */
+    *n = s->len;
     return st;
+}
+
+sluice_status sl_read_flagged(sluice_context *ctx, cl_mem buf, size_t at, void *value,
+                              sluice_stream *in, const char *fn, const char *what)
+{
+    uint32_t back[2];
+    cl_int err =
+        clEnqueueReadBuffer(ctx->queue, buf, CL_TRUE, at * 4, sizeof back, back, 0, NULL, NULL);
+    char prefix[96];
+    if (err != CL_SUCCESS) {
+        snprintf(prefix, sizeof prefix, "%s: reading the %s", fn, what);
+        return sl_cl_fail(ctx, err, prefix);
+    }
+    if (back[1]) {
+        snprintf(prefix, sizeof prefix, "%s: the input ", fn);
+        return sl_stream_overflowed(in, prefix);
+    }
+    memcpy(value, back, 4);
+    return SLUICE_OK;
 }
 
 sluice_status sl_set_args(sluice_context *ctx, cl_kernel k, const char *name, unsigned count,
@@ -33,10 +54,4 @@ sluice_status sl_set_args(sluice_context *ctx, cl_kernel k, const char *name, un
         }
     }
     return SLUICE_OK;
-}
-
-void sl_set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *err)
-{
-    if (*err == CL_SUCCESS)
-        *err = clSetKernelArg(k, i, size, value);
 }

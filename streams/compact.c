@@ -7,7 +7,10 @@
  * capacity is at least the input's length cannot overflow and the call
  * returns once queued; otherwise it waits for the result and returns
  * SLUICE_ERROR_OVERFLOW if too many records went to that output (its length
- * is then above its capacity, as after any overflowing kernel). */
+ * is then above its capacity, as after any overflowing kernel). An input
+ * that overflowed is SLUICE_ERROR_OVERFLOW at once when its length is known
+ * on the host; when it is only on the device, the outputs are void and
+ * reading them reports the overflow (kernels/sluice.cl). */
 #include "internal.h"
 #include "sluice/streams.h"
 
@@ -34,11 +37,16 @@ static sluice_status check_aux(sluice_context *ctx, const char *fn, const char *
     if (aux->record_size != 4)
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                        "%s: %s records must be 4 bytes, not %zu", fn, what, aux->record_size);
+    char prefix[64];
+    snprintf(prefix, sizeof prefix, "%s: the %s ", fn, what);
+    sluice_status st = sl_stream_check_known(aux, prefix);
+    if (st != SLUICE_OK)
+        return st;
     size_t n = input_bound(in);
-    size_t have =
-        aux->len_known ? (aux->len < aux->capacity ? aux->len : aux->capacity) : aux->capacity;
+    size_t have = aux->len_known ? aux->len : aux->capacity;
     if (have < n && !in->len_known) {
-        sluice_status st = sluice_stream_length(in, &n);
+        snprintf(prefix, sizeof prefix, "%s: the input ", fn);
+        st = sl_stream_length(in, prefix);
         if (st != SLUICE_OK)
             return st;
         n = input_bound(in);
@@ -69,7 +77,8 @@ static sluice_status check_out(sluice_context *ctx, const char *fn, sluice_strea
     return SLUICE_OK;
 }
 
-/* Checks the input stream: in this context, records of 4*k bytes. */
+/* Checks the input stream: in this context, records of 4*k bytes, not
+ * known to have overflowed. */
 static sluice_status check_in(sluice_context *ctx, const char *fn, sluice_stream *in)
 {
     if (!in)
@@ -81,7 +90,9 @@ static sluice_status check_in(sluice_context *ctx, const char *fn, sluice_stream
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                        "%s: records of %zu bytes are not a multiple of 4 bytes", fn,
                        in->record_size);
-    return SLUICE_OK;
+    char prefix[64];
+    snprintf(prefix, sizeof prefix, "%s: the input ", fn);
+    return sl_stream_check_known(in, prefix);
 }
 
 static sluice_status check_mode(sluice_context *ctx, const char *fn, sluice_output_mode mode)
@@ -120,7 +131,8 @@ static sluice_status make_kernel(sluice_context *ctx, const char *prefix, const 
 }
 
 /* After the launch: when an output could overflow (its capacity is below
- * the input bound), waits for its length and reports an overflow. */
+ * the input bound), waits for its length and reports an overflow (a void
+ * output, from an overflowed input, as the runtime words it). */
 static sluice_status check_overflow(sluice_context *ctx, const char *fn, size_t bound,
                                     sluice_stream *const *outs, const char *const *what,
                                     unsigned count)
@@ -128,14 +140,13 @@ static sluice_status check_overflow(sluice_context *ctx, const char *fn, size_t 
     for (unsigned k = 0; k < count; ++k) {
         if (outs[k]->capacity >= bound)
             continue;
-        size_t len;
-        sluice_status st = sluice_stream_length(outs[k], &len);
-        if (st != SLUICE_OK)
-            return st;
-        if (len > outs[k]->capacity)
+        sluice_status st = sl_stream_length(outs[k], "");
+        if (st == SLUICE_ERROR_OVERFLOW && outs[k]->len != SL_LEN_VOID)
             return sl_fail(ctx, SLUICE_ERROR_OVERFLOW,
                            "%s: %s capacity %zu is too small: %zu records went to it", fn, what[k],
-                           outs[k]->capacity, len);
+                           outs[k]->capacity, outs[k]->len);
+        if (st != SLUICE_OK)
+            return st;
     }
     return SLUICE_OK;
 }

@@ -57,10 +57,13 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
                        in->record_size);
 
     /* The length: known on the host, or read by the kernels on the device. */
+    sluice_status st = sl_stream_check_known(in, "sluice_reduce: the input ");
+    if (st != SLUICE_OK)
+        return st;
     cl_uint in_var = in->var, limit = (cl_uint)in->capacity, n_fixed;
     size_t bound;
     if (in->len_known) {
-        bound = in->len < in->capacity ? in->len : in->capacity;
+        bound = in->len;
         n_fixed = (cl_uint)bound;
     } else {
         bound = in->capacity;
@@ -82,11 +85,12 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
     cl_kernel part = NULL, final = NULL;
     cl_mem parts = NULL;
     cl_int err = CL_SUCCESS;
-    sluice_status st = sl_embedded_cl_kernel(ctx, "reduce.cl", part_name, &part);
+    st = sl_embedded_cl_kernel(ctx, "reduce.cl", part_name, &part);
     if (st == SLUICE_OK)
         st = sl_embedded_cl_kernel(ctx, "reduce.cl", final_name, &final);
     if (st == SLUICE_OK) {
-        parts = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, (global + 1) * 4, NULL, &err);
+        /* The partial results, the result and the overflow flag (reduce.cl). */
+        parts = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, (global + 2) * 4, NULL, &err);
         if (!parts)
             st = sl_cl_fail(ctx, err, "sluice_reduce: allocating partial results");
     }
@@ -108,11 +112,8 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
         st = sl_enqueue_raw(ctx, part, part_name, global, REDUCE_LOCAL);
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, final, final_name, 1, 1);
-    if (st == SLUICE_OK) {
-        err = clEnqueueReadBuffer(ctx->queue, parts, CL_TRUE, global * 4, 4, result, 0, NULL, NULL);
-        if (err != CL_SUCCESS)
-            st = sl_cl_fail(ctx, err, "sluice_reduce: reading the result");
-    }
+    if (st == SLUICE_OK)
+        st = sl_read_flagged(ctx, parts, global, result, in, "sluice_reduce", "result");
     if (parts)
         clReleaseMemObject(parts);
     if (part)

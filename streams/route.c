@@ -42,15 +42,11 @@ sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, slu
                        "sluice_route_bounded: fill and overflow need %u records each",
                        bucket_count);
     size_t n = 0, nv = 0;
-    st = sluice_stream_length(keys, &n);
+    st = sl_check_u32_stream(ctx, keys, "sluice_route_bounded", "keys", &n);
     if (st == SLUICE_OK)
-        st = sluice_stream_length(values, &nv);
+        st = sl_check_u32_stream(ctx, values, "sluice_route_bounded", "values", &nv);
     if (st != SLUICE_OK)
         return st;
-    if (n > keys->capacity)
-        n = keys->capacity;
-    if (nv > values->capacity)
-        nv = values->capacity;
     if (nv < n)
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                        "sluice_route_bounded: %zu values for %zu keys", nv, n);

@@ -37,7 +37,7 @@ static void scan_input_init(sluice_stream *in, scan_input *si)
     si->in_var = in->var;
     si->limit = (cl_uint)in->capacity;
     if (in->len_known) {
-        si->bound = in->len < in->capacity ? in->len : in->capacity;
+        si->bound = in->len; /* not past the capacity: checked first */
         si->n_fixed = (cl_uint)si->bound;
     } else {
         si->bound = in->capacity;
@@ -70,12 +70,15 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
                        "sluice_scan: records must be 4 bytes (input has %zu, output %zu)",
                        in->record_size, out->record_size);
 
+    static const char in_prefix[] = "sluice_scan: the input ";
+    sluice_status st0 = sl_stream_check_known(in, in_prefix);
+    if (st0 != SLUICE_OK)
+        return st0;
     scan_input si;
     scan_input_init(in, &si);
     if (out->capacity < si.bound) {
         /* The input may still fit once its device-side length is known. */
-        size_t len;
-        sluice_status st = sluice_stream_length(in, &len);
+        sluice_status st = sl_stream_length(in, in_prefix);
         if (st != SLUICE_OK)
             return st;
         scan_input_init(in, &si);
@@ -105,7 +108,8 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
         st = sl_embedded_cl_kernel(ctx, "scan.cl", names[i], &k[i]);
     cl_int err = CL_SUCCESS;
     if (st == SLUICE_OK) {
-        sums = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, (si.global + 1) * 4, NULL, &err);
+        /* The chunk sums, the total and the overflow flag (scan.cl). */
+        sums = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, (si.global + 2) * 4, NULL, &err);
         if (!sums)
             st = sl_cl_fail(ctx, err, "sluice_scan: allocating chunk sums");
     }
@@ -148,17 +152,12 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
         /* Pass 2 writes the output's length on the device. */
         out->len_known = si.n_fixed != SL_NONE;
         out->len = si.n_fixed != SL_NONE ? si.n_fixed : 0;
+        sl_stream_written(out, SL_WRITER_ALGORITHM, 0, "sluice_scan");
     }
     if (st == SLUICE_OK)
         st = sl_enqueue_raw(ctx, k[2], names[2], si.global, SCAN_LOCAL);
-    if (st == SLUICE_OK) {
-        if (total) {
-            err = clEnqueueReadBuffer(ctx->queue, sums, CL_TRUE, si.global * 4, 4, total, 0, NULL,
-                                      NULL);
-            if (err != CL_SUCCESS)
-                st = sl_cl_fail(ctx, err, "sluice_scan: reading the total");
-        }
-    }
+    if (st == SLUICE_OK && total)
+        st = sl_read_flagged(ctx, sums, si.global, total, in, "sluice_scan", "total");
     if (sums)
         clReleaseMemObject(sums);
     for (int i = 0; i < 3; ++i)

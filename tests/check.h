@@ -8,6 +8,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/wait.h>
 
 static int check_passed_, check_failed_;
@@ -71,6 +72,53 @@ static inline sluice_context *check_context(int profile)
         exit(2);
     }
     return ctx;
+}
+
+/* Makes `*out` a stream of `cap` uint32 records into which kernel
+ * check_fill emitted the n records 0 .. n-1 at output slot 0: past its
+ * capacity when n > cap. With `read` 0 its length stays on the device, as
+ * after any launch; with 1 the host reads it (which reports the overflow),
+ * so it is known on the host. For the tests of how overflow is reported;
+ * the caller destroys the stream. */
+static inline sluice_status check_overflowed(sluice_context *ctx, size_t n, size_t cap, int read,
+                                             sluice_stream **out)
+{
+    static const char src[] = "#include \"sluice.cl\"\n"
+                              "__kernel void check_fill(SLUICE_PARAMS, global uint *out)\n"
+                              "{\n"
+                              "    SLUICE_FOR_EACH(i)\n"
+                              "        SLUICE_EMIT(0, out, i);\n"
+                              "}\n";
+    sluice_program *p = NULL;
+    sluice_kernel *k = NULL;
+    sluice_status st = sluice_stream_create(ctx, 4, cap, out);
+    if (st == SLUICE_OK)
+        st = sluice_program_create_source(ctx, "check_fill.cl", src, NULL, &p);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(p, "check_fill", &k);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(k, 0, 0, *out, SLUICE_UNORDERED);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(k, n);
+    sluice_kernel_destroy(k);
+    sluice_program_destroy(p);
+    size_t len;
+    if (st == SLUICE_OK && read && sluice_stream_length(*out, &len) != SLUICE_ERROR_OVERFLOW)
+        st = SLUICE_ERROR_INVALID_ARGUMENT; /* n <= cap: it did not overflow */
+    return st;
+}
+
+/* Whether the context's error message names check_fill's overflow (see
+ * check_overflowed): the kernel, the output slot, the capacity and the
+ * records emitted. */
+static inline int check_overflow_named(sluice_context *ctx, size_t n, size_t cap)
+{
+    char want[160];
+    snprintf(want, sizeof want,
+             "%zu records were emitted into output slot 0 of kernel check_fill, a stream of "
+             "capacity %zu",
+             n, cap);
+    return strstr(sluice_context_error(ctx), want) != NULL;
 }
 
 /* xorshift32: reproducible random inputs. */

@@ -91,10 +91,34 @@ static void test_errors(sluice_context *ctx)
     sluice_stream_destroy(small);
 }
 
+/* Overflowed keys are an error, never indexed as truncated (issue 12). */
+static void test_overflowed_keys(sluice_context *ctx)
+{
+    const size_t n = 1000, cap = 600;
+    typedef sluice_status (*index_fn)(sluice_context *, sluice_stream *, uint32_t, sluice_stream *);
+    const index_fn f[2] = {sluice_cell_index_search, sluice_cell_index_count};
+    for (int known = 0; known < 2; ++known) {
+        for (int i = 0; i < 2; ++i) {
+            sluice_stream *keys = NULL, *start = NULL;
+            CHECK_OK(ctx, check_overflowed(ctx, n, cap, known, &keys));
+            CHECK_OK(ctx, sluice_stream_create(ctx, 4, 1001, &start));
+            sluice_status st = f[i](ctx, keys, 1000, start);
+            CHECK(st == SLUICE_ERROR_OVERFLOW &&
+                      strstr(sluice_context_error(ctx), "keys stream overflowed: ") &&
+                      check_overflow_named(ctx, n, cap),
+                  "cell index %d of overflowed keys (known %d): %s", i, known,
+                  sluice_context_error(ctx));
+            sluice_stream_destroy(keys);
+            sluice_stream_destroy(start);
+        }
+    }
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
     test_errors(ctx);
+    test_overflowed_keys(ctx);
     run_case(ctx, 0, 0, 0);           /* nothing at all */
     run_case(ctx, 0, 10, 10);         /* no keys: every start is 0 */
     run_case(ctx, 100, 0, 5);         /* no cells: every key is beyond */

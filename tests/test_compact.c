@@ -287,6 +287,67 @@ static void test_errors(sluice_context *ctx)
     sluice_stream_destroy(shortf);
 }
 
+/* An input that overflowed is an error, never read as truncated (issue 12):
+ * at once when its length is known on the host; when it is only on the
+ * device the outputs are void, and reading them (which the call does itself
+ * for an output that may be too small) reports where the overflow began. */
+static void test_overflowed_input(sluice_context *ctx)
+{
+    const size_t n = 1000, cap = 600;
+    sluice_stream *f = NULL, *o = NULL, *small = NULL;
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, cap, &f));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, cap, &o));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, 10, &small));
+    uint32_t ones[600];
+    for (size_t i = 0; i < cap; ++i)
+        ones[i] = 1;
+    CHECK_OK(ctx, sluice_stream_upload(f, ones, cap));
+    for (int known = 0; known < 2; ++known) {
+        for (int m = 0; m < 2; ++m) {
+            sluice_output_mode mode = (sluice_output_mode)m;
+            sluice_stream *in = NULL, *outs[2] = {o, small};
+            uint32_t t = 50;
+            sluice_status st[3];
+            const char *fn[3] = {"sluice_compact", "sluice_split", "sluice_partition"};
+            CHECK_OK(ctx, check_overflowed(ctx, n, cap, known, &in));
+            st[0] = sluice_compact(ctx, in, f, o, mode);
+            if (!known) { /* queued: the output is void */
+                size_t len = 1;
+                CHECK(st[0] == SLUICE_OK, "compact queued: %s", sluice_status_string(st[0]));
+                st[0] = sluice_stream_length(o, &len);
+                CHECK(len == 0 && strstr(sluice_context_error(ctx),
+                                         "output slot 0 of kernel compact_w1, written from it, "
+                                         "is void"),
+                      "void compaction: %s", sluice_context_error(ctx));
+            }
+            CHECK(st[0] == SLUICE_ERROR_OVERFLOW && check_overflow_named(ctx, n, cap),
+                  "compact, known %d: %s", known, sluice_context_error(ctx));
+            st[1] = sluice_split(ctx, in, f, outs, 2, mode);
+            CHECK(st[1] == SLUICE_ERROR_OVERFLOW && check_overflow_named(ctx, n, cap),
+                  "split, known %d: %s", known, sluice_context_error(ctx));
+            st[2] = sluice_partition(ctx, in, SLUICE_U32, &t, o, small, mode);
+            CHECK(st[2] == SLUICE_ERROR_OVERFLOW && check_overflow_named(ctx, n, cap),
+                  "partition, known %d: %s", known, sluice_context_error(ctx));
+            if (known)
+                for (int i = 0; i < 3; ++i)
+                    CHECK(st[i] == SLUICE_ERROR_OVERFLOW, "%s", fn[i]);
+            /* An overflowed flags stream is refused as well. */
+            if (known) {
+                sluice_status sf = sluice_compact(ctx, o, in, small, mode);
+                CHECK(sf == SLUICE_ERROR_OVERFLOW &&
+                          strstr(sluice_context_error(ctx),
+                                 "sluice_compact: the flags stream overflowed: ") &&
+                          check_overflow_named(ctx, n, cap),
+                      "overflowed flags: %s", sluice_context_error(ctx));
+            }
+            sluice_stream_destroy(in);
+        }
+    }
+    sluice_stream_destroy(f);
+    sluice_stream_destroy(o);
+    sluice_stream_destroy(small);
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
@@ -311,6 +372,7 @@ int main(void)
     }
     check_split(ctx, (size_t)1 << 20, 16, 8, SLUICE_ORDERED);
     test_errors(ctx);
+    test_overflowed_input(ctx);
     sluice_context_destroy(ctx);
 
     /* Chunks of 37 and 4096 records: 16-record blocks (SLUICE_EMIT16) with

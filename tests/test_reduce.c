@@ -239,6 +239,30 @@ static void test_errors(sluice_context *ctx)
     sluice_stream_destroy(wide);
 }
 
+/* An input that overflowed is an error, never reduced as truncated (issue
+ * 12): its length known on the host, or only on the device (the flag comes
+ * back with the result), for a uint and a float reduction. */
+static void test_overflowed_input(sluice_context *ctx)
+{
+    const size_t n = 1000, cap = 600;
+    for (int known = 0; known < 2; ++known) {
+        for (int t = 0; t < 2; ++t) {
+            sluice_stream *in = NULL;
+            CHECK_OK(ctx, check_overflowed(ctx, n, cap, known, &in));
+            uint32_t r = 7;
+            sluice_status st = sluice_reduce(ctx, in, t ? SLUICE_F32 : SLUICE_U32,
+                                             t ? SLUICE_MAX : SLUICE_SUM, &r);
+            CHECK(st == SLUICE_ERROR_OVERFLOW && r == 7 &&
+                      strstr(sluice_context_error(ctx),
+                             "sluice_reduce: the input stream overflowed: ") &&
+                      check_overflow_named(ctx, n, cap),
+                  "reduce of an overflowed input (known %d, type %d): %s", known, t,
+                  sluice_context_error(ctx));
+            sluice_stream_destroy(in);
+        }
+    }
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
@@ -246,6 +270,7 @@ int main(void)
     test_special(ctx);
     test_device_length(ctx);
     test_errors(ctx);
+    test_overflowed_input(ctx);
     sluice_context_destroy(ctx);
     return check_summary();
 }

@@ -125,10 +125,42 @@ static void test_errors(sluice_context *ctx)
     sluice_stream_destroy(small);
 }
 
+/* Overflowed keys or values are an error, never routed as truncated (issue
+ * 12). */
+static void test_overflowed(sluice_context *ctx)
+{
+    const size_t n = 1000, cap = 600;
+    for (int known = 0; known < 2; ++known) {
+        for (int which = 0; which < 2; ++which) { /* 0: the keys overflowed, 1: the values */
+            sluice_stream *bad = NULL, *good = NULL, *o = NULL, *f = NULL, *ov = NULL;
+            CHECK_OK(ctx, check_overflowed(ctx, n, cap, known, &bad));
+            CHECK_OK(ctx, sluice_stream_create(ctx, 4, cap, &good));
+            CHECK_OK(ctx, sluice_stream_set_length(good, cap));
+            CHECK_OK(ctx, sluice_stream_create(ctx, 4, 16, &o));
+            CHECK_OK(ctx, sluice_stream_create(ctx, 4, 4, &f));
+            CHECK_OK(ctx, sluice_stream_create(ctx, 4, 4, &ov));
+            sluice_status st = which ? sluice_route_bounded(ctx, good, bad, 4, 4, o, f, ov)
+                                     : sluice_route_bounded(ctx, bad, good, 4, 4, o, f, ov);
+            char want[64];
+            snprintf(want, sizeof want, "%s stream overflowed: ", which ? "values" : "keys");
+            CHECK(st == SLUICE_ERROR_OVERFLOW && strstr(sluice_context_error(ctx), want) &&
+                      check_overflow_named(ctx, n, cap),
+                  "routing overflowed %s (known %d): %s", which ? "values" : "keys", known,
+                  sluice_context_error(ctx));
+            sluice_stream_destroy(bad);
+            sluice_stream_destroy(good);
+            sluice_stream_destroy(o);
+            sluice_stream_destroy(f);
+            sluice_stream_destroy(ov);
+        }
+    }
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
     test_errors(ctx);
+    test_overflowed(ctx);
     run_case(ctx, 0, 0, 0, 1);             /* nothing */
     run_case(ctx, 0, 10, 4, 10);           /* no records: all empty */
     run_case(ctx, 100, 10, 0, 10);         /* no places: all overflow */

@@ -53,6 +53,17 @@ static const char *kernels_src =
     "            SLUICE_EMIT_IF(0, out, in[i], in[i] < 100u);\n"
     "    }\n"
     "}\n"
+    /* Nine mapped outputs: one more than a launch sets the lengths of. */
+    "__kernel void fan9(SLUICE_PARAMS, global const uint *in, global uint *o0,\n"
+    "                   global uint *o1, global uint *o2, global uint *o3, global uint *o4,\n"
+    "                   global uint *o5, global uint *o6, global uint *o7, global uint *o8)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i) {\n"
+    "        uint x = in[i];\n"
+    "        o0[i] = x; o1[i] = x + 1u; o2[i] = x + 2u; o3[i] = x + 3u; o4[i] = x + 4u;\n"
+    "        o5[i] = x + 5u; o6[i] = x + 6u; o7[i] = x + 7u; o8[i] = x + 8u;\n"
+    "    }\n"
+    "}\n"
     /* Halves every value and keeps those still above 1: a shrinking loop. */
     "__kernel void halve(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
     "{\n"
@@ -283,7 +294,17 @@ static void test_multi_emit(sluice_context *ctx, sluice_program *p, sluice_outpu
     CHECK(st == SLUICE_ERROR_OVERFLOW && len == rn, "overflow: %s, %zu", sluice_status_string(st),
           len);
     CHECK(memcmp(got, ref, 2 * 4) == 0, "records before the overflow are intact");
-    /* An overflowed stream used as input: only its capacity is read. */
+    char named[160];
+    snprintf(named, sizeof named,
+             "stream overflowed: %zu records were emitted into output slot 0 of kernel dup, a "
+             "stream of capacity %zu",
+             2 + 2 * (rn - 2), rn);
+    CHECK(strstr(sluice_context_error(ctx), named), "overflow message: %s",
+          sluice_context_error(ctx));
+    /* An overflowed stream used as input is an error, never read as
+     * truncated. Its length only on the device: the launch is queued, reads
+     * no records and makes its output void; reading that output reports the
+     * overflow where it began. */
     sluice_kernel *h = NULL;
     sluice_stream *ho = NULL;
     CHECK_OK(ctx, sluice_kernel_create(p, "halve", &h));
@@ -297,11 +318,49 @@ static void test_multi_emit(sluice_context *ctx, sluice_program *p, sluice_outpu
     CHECK_OK(ctx, sluice_kernel_set_input(h, 0, o));
     CHECK_OK(ctx, sluice_kernel_set_output(h, 1, 0, ho, SLUICE_UNORDERED));
     CHECK_OK(ctx, sluice_kernel_launch(h));
-    size_t want_h = 0, got_h = 0;
-    for (size_t i = 0; i < rn; ++i)
-        want_h += got[i] / 2 > 1;
-    CHECK_OK(ctx, sluice_stream_length(ho, &got_h));
-    CHECK(got_h == want_h, "input past capacity is capped: %zu records, want %zu", got_h, want_h);
+    size_t got_h = 1, emitted = 2 + 3 * (rn - 2); /* three launches appended to o */
+    st = sluice_stream_length(ho, &got_h);
+    char want[256];
+    snprintf(want, sizeof want,
+             "stream overflowed: %zu records were emitted into output slot 0 of kernel dup, a "
+             "stream of capacity %zu; output slot 0 of kernel halve, written from it, is void",
+             emitted, rn);
+    CHECK(st == SLUICE_ERROR_OVERFLOW && got_h == 0 && strstr(sluice_context_error(ctx), want),
+          "overflowed input on the device: %s, %zu: %s", sluice_status_string(st), got_h,
+          sluice_context_error(ctx));
+    CHECK(sluice_stream_download(ho, got, rn, &got_h) == SLUICE_ERROR_OVERFLOW && got_h == 0,
+          "a void stream downloads nothing: %zu", got_h);
+    /* A mapped output takes the input's length: void too. */
+    sluice_kernel *sc = NULL;
+    sluice_stream *mo = NULL;
+    float two = 2.0f;
+    CHECK_OK(ctx, sluice_kernel_create(p, "scale", &sc));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, rn, &mo));
+    CHECK_OK(ctx, sluice_kernel_set_input(sc, 0, o));
+    CHECK_OK(ctx, sluice_kernel_set_stream(sc, 1, mo, 1));
+    CHECK_OK(ctx, sluice_kernel_set_arg(sc, 2, sizeof two, &two));
+    CHECK_OK(ctx, sluice_kernel_launch(sc));
+    CHECK(sluice_stream_length(mo, &got_h) == SLUICE_ERROR_OVERFLOW &&
+              strstr(sluice_context_error(ctx), "the mapped output (argument 1) of kernel scale, "
+                                                "written from it, is void"),
+          "mapped output of an overflowed input: %s", sluice_context_error(ctx));
+    sluice_stream_destroy(mo);
+    sluice_kernel_destroy(sc);
+    /* Its length known on the host: the launch itself fails. */
+    size_t len_o = 0;
+    CHECK(sluice_stream_length(o, &len_o) == SLUICE_ERROR_OVERFLOW && len_o == emitted,
+          "overflowed length %zu, want %zu", len_o, emitted);
+    CHECK(sluice_kernel_launch(h) == SLUICE_ERROR_OVERFLOW, "launch over an overflowed input");
+    CHECK(strstr(sluice_context_error(ctx), "kernel halve: its input (argument 0) stream "
+                                            "overflowed: ") &&
+              strstr(sluice_context_error(ctx), "output slot 0 of kernel dup"),
+          "launch message: %s", sluice_context_error(ctx));
+    /* Recovery: growing an overflowed stream empties it, and it fills again. */
+    CHECK_OK(ctx, sluice_stream_grow(o, emitted));
+    CHECK(sluice_stream_length(o, &len_o) == SLUICE_OK && len_o == 0, "grown empty: %zu", len_o);
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+    CHECK_OK(ctx, sluice_stream_length(o, &len_o));
+    CHECK(len_o == rn - 2, "refilled after growing: %zu, want %zu", len_o, rn - 2);
     sluice_stream_destroy(ho);
     sluice_kernel_destroy(h);
     sluice_stream_destroy(a);
@@ -450,6 +509,209 @@ static void test_loop(sluice_context *ctx, sluice_program *p)
     sluice_kernel_destroy(u.k);
 }
 
+/* Mapped outputs of an input whose length is on the device take its length,
+ * the ninth as well (set by a kernel of its own), and are void when it
+ * overflowed, even an input of capacity 0 (a launch over it is still
+ * queued). */
+static void test_mapped_lengths(sluice_context *ctx, sluice_program *p)
+{
+    const size_t n = 5000, cap = 3000;
+    sluice_kernel *fan = NULL, *h = NULL;
+    sluice_stream *o[9] = {NULL}, *src = NULL, *half = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "fan9", &fan));
+    CHECK_OK(ctx, sluice_kernel_create(p, "halve", &h));
+    for (unsigned j = 0; j < 9; ++j) {
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &o[j]));
+        CHECK_OK(ctx, sluice_kernel_set_stream(fan, 1 + j, o[j], 1));
+    }
+    for (int overflowed = 0; overflowed < 2; ++overflowed) {
+        /* check_fill emits n records: into a capacity of n, or of cap. */
+        CHECK_OK(ctx, check_overflowed(ctx, n, overflowed ? cap : n, 0, &src));
+        CHECK_OK(ctx, sluice_kernel_set_input(fan, 0, src));
+        CHECK_OK(ctx, sluice_kernel_launch(fan));
+        for (unsigned j = 0; j < 9; ++j) {
+            size_t len = 1;
+            sluice_status st = sluice_stream_length(o[j], &len);
+            if (overflowed)
+                CHECK(st == SLUICE_ERROR_OVERFLOW && len == 0 && check_overflow_named(ctx, n, cap),
+                      "mapped output %u of an overflowed input: %s", j, sluice_context_error(ctx));
+            else
+                CHECK(st == SLUICE_OK && len == n, "mapped output %u: %s, %zu", j,
+                      sluice_status_string(st), len);
+        }
+        sluice_stream_destroy(src);
+    }
+    CHECK_OK(ctx, check_overflowed(ctx, 5, 0, 0, &src));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, 10, &half));
+    CHECK_OK(ctx, sluice_kernel_set_input(h, 0, src));
+    CHECK_OK(ctx, sluice_kernel_set_output(h, 1, 0, half, SLUICE_ORDERED));
+    CHECK_OK(ctx, sluice_kernel_launch(h));
+    size_t len = 1;
+    CHECK(sluice_stream_length(half, &len) == SLUICE_ERROR_OVERFLOW && len == 0 &&
+              check_overflow_named(ctx, 5, 0),
+          "output of an overflowed input of capacity 0: %s", sluice_context_error(ctx));
+    sluice_stream_destroy(src);
+    sluice_stream_destroy(half);
+    for (unsigned j = 0; j < 9; ++j)
+        sluice_stream_destroy(o[j]);
+    sluice_kernel_destroy(fan);
+    sluice_kernel_destroy(h);
+}
+
+/* Overflow inside loops (issue 12): an output too small for a pass is an
+ * error that stops the loop, whichever value the loop watches. */
+typedef struct overflow_user {
+    sluice_kernel *dup, *halve;
+    sluice_stream *a, *b, *tmp;
+    sluice_output_mode mode;
+    int two_kernels; /* dup into tmp, then halve from tmp into b */
+    int read_length; /* the pass function reads b's length itself */
+} overflow_user;
+
+static sluice_status overflow_pass(void *user, unsigned pass, unsigned choice)
+{
+    (void)pass;
+    (void)choice;
+    overflow_user *u = user;
+    sluice_stream *first = u->two_kernels ? u->tmp : u->b;
+    sluice_status st = sluice_stream_clear(u->b);
+    if (st == SLUICE_OK)
+        st = sluice_stream_clear(u->tmp);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_input(u->dup, 0, u->a);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(u->dup, 1, 0, first, u->mode);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch(u->dup);
+    if (st == SLUICE_OK && u->two_kernels) {
+        st = sluice_kernel_set_input(u->halve, 0, u->tmp);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_output(u->halve, 1, 0, u->b, SLUICE_UNORDERED);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_launch(u->halve);
+    }
+    size_t len;
+    if (st == SLUICE_OK && u->read_length)
+        st = sluice_stream_length(u->b, &len);
+    if (st == SLUICE_OK)
+        st = sluice_stream_swap(u->a, u->b);
+    return st;
+}
+
+/* Goes on while the first watched value is non-zero, and always runs pass 0
+ * (a loop that watches only a counter). */
+static unsigned first_or_nonzero(void *user, unsigned pass, const uint32_t *values, size_t count)
+{
+    (void)user;
+    return pass == 0 || (count && values[0]) ? 0 : SLUICE_LOOP_STOP;
+}
+
+/* Runs one loop of overflow_pass over `n` records from `in` (survivors of
+ * capacity `b_cap`, the intermediate stream of `tmp_cap`) and checks that it
+ * stops after pass 0 with SLUICE_ERROR_OVERFLOW and a message holding
+ * `want`. With d.stream_count 1 the loop watches the survivors. */
+static void check_loop_overflow(sluice_context *ctx, overflow_user *u, sluice_loop_desc d,
+                                const uint32_t *in, size_t n, size_t b_cap, size_t tmp_cap,
+                                const char *want, const char *what)
+{
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &u->a));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, b_cap, &u->b));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, tmp_cap, &u->tmp));
+    CHECK_OK(ctx, sluice_stream_upload(u->a, in, n));
+    sluice_stream *watch[] = {u->a};
+    d.streams = d.stream_count ? watch : NULL;
+    d.pass = overflow_pass;
+    d.user = u;
+    sluice_loop *loop = NULL;
+    CHECK_OK(ctx, sluice_loop_create(ctx, &d, &loop));
+    sluice_status st = sluice_loop_run(loop);
+    CHECK(st == SLUICE_ERROR_OVERFLOW && sluice_loop_pass_count(loop) == 1,
+          "%s: %s after %u passes", what, sluice_status_string(st), sluice_loop_pass_count(loop));
+    CHECK(strstr(sluice_context_error(ctx), "loop pass 0: ") &&
+              strstr(sluice_context_error(ctx), want),
+          "%s: message %s, want %s", what, sluice_context_error(ctx), want);
+    if (d.stream_count) { /* the watched stream is still overflowed: no pass runs */
+        st = sluice_loop_run(loop);
+        CHECK(st == SLUICE_ERROR_OVERFLOW && sluice_loop_pass_count(loop) == 0,
+              "%s: run again: %s after %u passes", what, sluice_status_string(st),
+              sluice_loop_pass_count(loop));
+    }
+    sluice_loop_destroy(loop);
+    sluice_stream_destroy(u->a);
+    sluice_stream_destroy(u->b);
+    sluice_stream_destroy(u->tmp);
+}
+
+static void test_loop_overflow(sluice_context *ctx, sluice_program *p, sluice_output_mode mode)
+{
+    /* The issue: survivors of capacity 50000 receive about 100000 records in
+     * pass 0. dup emits in[i] % 3 records per input record. */
+    const size_t n = 100000, cap = 50000;
+    uint32_t *in = malloc(n * 4);
+    size_t emitted = 0;
+    for (size_t i = 0; i < n; ++i) {
+        in[i] = (uint32_t)(i * 7919u % 10007u);
+        emitted += in[i] % 3;
+    }
+    overflow_user u = {0};
+    u.mode = mode;
+    sluice_counters *cn = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "dup", &u.dup));
+    CHECK_OK(ctx, sluice_kernel_create(p, "halve", &u.halve));
+    CHECK_OK(ctx, sluice_counters_create(ctx, 1, NULL, &cn));
+    CHECK_OK(ctx, sluice_kernel_set_counters(u.halve, cn));
+    char want[256];
+    snprintf(want, sizeof want,
+             "stream overflowed: %zu records were emitted into output slot 0 of kernel dup, a "
+             "stream of capacity %zu",
+             emitted, cap);
+    CHECK(emitted > cap && emitted < n, "the test emits %zu records", emitted);
+
+    /* One kernel, the survivors watched. */
+    sluice_loop_desc d = {0};
+    d.stream_count = 1;
+    check_loop_overflow(ctx, &u, d, in, n, cap, cap, want, "watched survivors");
+
+    /* Two kernels: dup overflows a stream the loop does not watch, halve
+     * reads it; the survivors it writes are void and say where it began. */
+    u.two_kernels = 1;
+    char want_void[384];
+    snprintf(want_void, sizeof want_void,
+             "%s; output slot 0 of kernel halve, written from it, is void", want);
+    check_loop_overflow(ctx, &u, d, in, n, n, cap, want_void, "unwatched stream");
+
+    /* halve counted into its counter in that loop, over nothing: reading
+     * the counter reports it until the counter is reset. */
+    uint32_t count = 0;
+    CHECK(sluice_counters_read(cn, &count) == SLUICE_ERROR_OVERFLOW &&
+              strstr(sluice_context_error(ctx), "so the counts are void"),
+          "void counters: %s", sluice_context_error(ctx));
+    CHECK_OK(ctx, sluice_counters_reset(cn));
+    CHECK_OK(ctx, sluice_counters_read(cn, &count));
+
+    /* The same, watching only halve's counter: its overflow note stops the
+     * loop (which would otherwise stop with OK: halve counted nothing). */
+    d.stream_count = 0;
+    d.counters = cn;
+    d.reset_counters = 1;
+    d.oracle = first_or_nonzero;
+    snprintf(want_void, sizeof want_void,
+             "%s; a kernel counting into these counters read it, so the counts are void", want);
+    check_loop_overflow(ctx, &u, d, in, n, n, cap, want_void, "watched counter");
+
+    /* A pass function that reads a length gets the error and ends the loop
+     * with it, here where nothing is watched (the oracle runs pass 0). */
+    u.two_kernels = 0;
+    u.read_length = 1;
+    d.counters = NULL;
+    check_loop_overflow(ctx, &u, d, in, n, cap, cap, want, "pass function");
+
+    sluice_counters_destroy(cn);
+    sluice_kernel_destroy(u.dup);
+    sluice_kernel_destroy(u.halve);
+    free(in);
+}
+
 static void test_errors(sluice_context *ctx)
 {
     const char *bad_src = "#include \"sluice.cl\"\n"
@@ -543,6 +805,9 @@ int main(void)
     test_multi_emit(ctx, p, SLUICE_UNORDERED);
     test_block_emit(ctx, p);
     test_loop(ctx, p);
+    test_mapped_lengths(ctx, p);
+    test_loop_overflow(ctx, p, SLUICE_ORDERED);
+    test_loop_overflow(ctx, p, SLUICE_UNORDERED);
     test_errors(ctx);
     sluice_program_destroy(p);
     sluice_context_destroy(ctx);

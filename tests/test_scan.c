@@ -228,6 +228,40 @@ static void test_errors(sluice_context *ctx)
     sluice_stream_destroy(b);
 }
 
+/* An input that overflowed is an error, never scanned as truncated (issue
+ * 12). Case 0: its length only on the device, the call queued, the output
+ * void; 1: the same with the total, which the call reads anyway; 2: an
+ * output too small for the capacity, so the call reads the input's length;
+ * 3: the length known on the host. */
+static void test_overflowed_input(sluice_context *ctx)
+{
+    const size_t n = 1000, cap = 600;
+    for (int c = 0; c < 4; ++c) {
+        sluice_stream *in = NULL, *out = NULL;
+        CHECK_OK(ctx, check_overflowed(ctx, n, cap, c == 3, &in));
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, c == 2 ? cap - 1 : cap, &out));
+        uint32_t total = 7;
+        sluice_status st = sluice_scan(ctx, in, out, SLUICE_U32, 0, c == 1 ? &total : NULL);
+        if (c == 0) {
+            size_t len = 1;
+            CHECK(st == SLUICE_OK, "scan queued: %s", sluice_status_string(st));
+            st = sluice_stream_length(out, &len);
+            CHECK(len == 0 && strstr(sluice_context_error(ctx),
+                                     "the output of sluice_scan, written from it, is void"),
+                  "void scan: %s", sluice_context_error(ctx));
+        } else {
+            CHECK(strstr(sluice_context_error(ctx), "sluice_scan: the input stream overflowed: "),
+                  "case %d: %s", c, sluice_context_error(ctx));
+        }
+        CHECK(st == SLUICE_ERROR_OVERFLOW && check_overflow_named(ctx, n, cap),
+              "scan of an overflowed input, case %d: %s: %s", c, sluice_status_string(st),
+              sluice_context_error(ctx));
+        CHECK(total == 7, "no total from an overflowed input: %u", total);
+        sluice_stream_destroy(in);
+        sluice_stream_destroy(out);
+    }
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
@@ -245,6 +279,7 @@ int main(void)
     check_f32(ctx, (size_t)1 << 24, EQUAL, 0);
     test_device_length(ctx);
     test_errors(ctx);
+    test_overflowed_input(ctx);
     sluice_context_destroy(ctx);
     return check_summary();
 }

@@ -170,11 +170,37 @@ static void test_errors(sluice_context *ctx, const char *name, sort_fn sort)
     sluice_stream_destroy(shortv);
 }
 
+/* Overflowed keys or values are an error, never sorted as truncated (issue
+ * 12), whether their length is known on the host or only on the device. */
+static void test_overflowed(sluice_context *ctx, const char *name, sort_fn sort)
+{
+    const size_t n = 1000, cap = 600;
+    for (int known = 0; known < 2; ++known) {
+        for (int which = 0; which < 2; ++which) { /* 0: the keys overflowed, 1: the values */
+            sluice_stream *bad = NULL, *good = NULL;
+            CHECK_OK(ctx, check_overflowed(ctx, n, cap, known, &bad));
+            CHECK_OK(ctx, sluice_stream_create(ctx, 4, cap, &good));
+            CHECK_OK(ctx, sluice_stream_set_length(good, cap));
+            sluice_status st = which ? sort(ctx, good, bad) : sort(ctx, bad, good);
+            char want[64];
+            snprintf(want, sizeof want, "%s stream overflowed: ", which ? "values" : "keys");
+            CHECK(st == SLUICE_ERROR_OVERFLOW && strstr(sluice_context_error(ctx), want) &&
+                      check_overflow_named(ctx, n, cap),
+                  "%s with overflowed %s (known %d): %s", name, which ? "values" : "keys", known,
+                  sluice_context_error(ctx));
+            sluice_stream_destroy(bad);
+            sluice_stream_destroy(good);
+        }
+    }
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
     test_errors(ctx, "radix", sluice_sort_radix);
     test_errors(ctx, "bitonic", sluice_sort_bitonic);
+    test_overflowed(ctx, "radix", sluice_sort_radix);
+    test_overflowed(ctx, "bitonic", sluice_sort_bitonic);
     test_sort(ctx, "radix", sluice_sort_radix, 1, (size_t)1 << 24);
     test_sort(ctx, "bitonic", sluice_sort_bitonic, 0, 0);
     sluice_context_destroy(ctx);

@@ -230,6 +230,8 @@ void sluice_context_destroy(sluice_context *ctx)
     sl_profile_free(ctx);
     if (ctx->scan_kernel)
         clReleaseKernel(ctx->scan_kernel);
+    if (ctx->map_length_kernel)
+        clReleaseKernel(ctx->map_length_kernel);
     if (ctx->embedded) {
         for (size_t i = 0; i < sl_embedded_source_count; ++i) {
             if (ctx->embedded[i]) {

@@ -34,7 +34,7 @@ sluice_status sluice_counters_create(sluice_context *ctx, size_t count, const ch
         sluice_counters_destroy(c);
         return sl_fail(ctx, st, "out of host memory");
     }
-    st = sl_vars_alloc(ctx, count, &c->var);
+    st = sl_vars_alloc(ctx, count + 1, &c->var); /* + the overflow note */
     if (st != SLUICE_OK) {
         sluice_counters_destroy(c);
         return st;
@@ -47,7 +47,8 @@ void sluice_counters_destroy(sluice_counters *c)
 {
     if (!c)
         return;
-    sl_vars_free(c->ctx, c->var, c->count);
+    if (c->var != SL_NONE)
+        sl_vars_free(c->ctx, c->var, c->count + 1);
     if (c->names)
         for (size_t i = 0; i < c->count; ++i)
             free(c->names[i]);
@@ -74,17 +75,29 @@ sluice_status sluice_counters_reset(sluice_counters *c)
 {
     if (!c)
         return SLUICE_ERROR_INVALID_ARGUMENT;
-    return sl_vars_fill(c->ctx, c->var, c->count, 0);
+    return sl_vars_fill(c->ctx, c->var, c->count + 1, 0);
+}
+
+sluice_status sl_counters_check(sluice_counters *c, cl_uint note)
+{
+    if (!note)
+        return SLUICE_OK;
+    char what[384];
+    sl_describe_overflow(c->ctx, note - 1, what, sizeof what);
+    return sl_fail(c->ctx, SLUICE_ERROR_OVERFLOW,
+                   "stream overflowed: %s; a kernel counting into these counters read it, so "
+                   "the counts are void",
+                   what);
 }
 
 sluice_status sluice_counters_read(sluice_counters *c, uint32_t *values)
 {
     if (!c || !values)
         return SLUICE_ERROR_INVALID_ARGUMENT;
-    cl_uint v[SLUICE_MAX_COUNTERS];
-    sluice_status st = sl_vars_read(c->ctx, c->var, c->count, v);
+    cl_uint v[SLUICE_MAX_COUNTERS + 1];
+    sluice_status st = sl_vars_read(c->ctx, c->var, c->count + 1, v);
     if (st == SLUICE_OK)
         for (size_t i = 0; i < c->count; ++i)
             values[i] = v[i];
-    return st;
+    return st == SLUICE_OK ? sl_counters_check(c, v[c->count]) : st;
 }

@@ -255,6 +255,30 @@ static sluice_status set_hidden(sluice_kernel *k, const sl_launch *L)
     return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "setting launch arguments");
 }
 
+/* Queues setting the length of the stream with variable `dst` to the
+ * device-side length of the input (variable `src`, capacity `cap`), or
+ * voiding it when the input overflowed (kernels/runtime.cl): for the mapped
+ * outputs past the SLUICE_MAX_OUTPUTS that a launch sets itself. */
+static sluice_status map_length(sluice_context *ctx, cl_uint src, cl_uint cap, cl_uint dst)
+{
+    sluice_status st = SLUICE_OK;
+    if (!ctx->map_length_kernel)
+        st = sl_embedded_cl_kernel(ctx, "runtime.cl", "sluice_map_length", &ctx->map_length_kernel);
+    cl_kernel mk = ctx->map_length_kernel;
+    cl_int err = CL_SUCCESS;
+    if (st == SLUICE_OK) {
+        sl_set_arg(mk, 0, sizeof(cl_mem), &ctx->vars, &err);
+        sl_set_arg(mk, 1, sizeof src, &src, &err);
+        sl_set_arg(mk, 2, sizeof cap, &cap, &err);
+        sl_set_arg(mk, 3, sizeof dst, &dst, &err);
+        if (err != CL_SUCCESS)
+            st = sl_cl_fail(ctx, err, "setting the arguments of sluice_map_length");
+    }
+    if (st == SLUICE_OK)
+        st = sl_enqueue_raw(ctx, mk, "sluice_map_length", 1, 1);
+    return st;
+}
+
 static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 {
     if (!k)
@@ -281,8 +305,16 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         L.in_var = 0;
         bound = count;
     } else if (k->input->len_known) {
-        L.n_fixed =
-            (cl_uint)(k->input->len < k->input->capacity ? k->input->len : k->input->capacity);
+        /* An overflowed input is an error, never read as truncated. (One
+         * whose length is only on the device is checked there: the launch
+         * reads no records and voids its outputs, see sluice_begin_.) */
+        if (k->input->len > k->input->capacity) {
+            char prefix[128];
+            snprintf(prefix, sizeof prefix, "kernel %s: its input (argument %u) ", k->name,
+                     k->input_arg);
+            return sl_stream_check_known(k->input, prefix);
+        }
+        L.n_fixed = (cl_uint)k->input->len;
         L.in_var = k->input->var;
         bound = L.n_fixed;
     } else {
@@ -291,13 +323,23 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         L.in_cap = (cl_uint)k->input->capacity;
         bound = k->input->capacity;
     }
-    /* Mapped outputs must hold the whole input. */
-    for (unsigned a = 0; a < k->n_args; ++a)
-        if (k->arg_map[a] && k->arg_stream[a]->capacity < bound)
+    /* A launch is queued when there may be records, and always when the
+     * input's length is on the device: even an input of capacity 0 may have
+     * overflowed, and the launch then voids what it writes. */
+    const int queued = bound > 0 || L.n_fixed == SL_NONE;
+    /* Mapped outputs must hold the whole input. When its length is on the
+     * device, the launch sets theirs (up to SLUICE_MAX_OUTPUTS of them). */
+    for (unsigned a = 0; a < k->n_args; ++a) {
+        if (!k->arg_map[a])
+            continue;
+        if (k->arg_stream[a]->capacity < bound)
             return sl_fail(ctx, SLUICE_ERROR_OVERFLOW,
                            "kernel %s: mapped output (argument %u) holds %zu records but the "
                            "input may have %zu",
                            k->name, a, k->arg_stream[a]->capacity, bound);
+        if (L.n_fixed == SL_NONE && L.n_map < SLUICE_MAX_OUTPUTS)
+            L.map_var[L.n_map++] = k->arg_stream[a]->var;
+    }
 
     size_t chunk = choose_chunk(ctx, bound);
     size_t chunks = (bound + chunk - 1) / chunk;
@@ -335,7 +377,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 
     sluice_status st = SLUICE_OK;
     cl_event ev = NULL;
-    if (bound > 0) {
+    if (queued) {
         if (L.ordered_mask) {
             size_t rows = 0; /* rows up to the highest ordered slot */
             for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
@@ -382,23 +424,25 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 
     /* Lengths: conditional outputs are now known only on the device; mapped
      * outputs take the input's length. */
-    for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
-        if (k->out[s] && bound > 0)
+    for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s) {
+        if (k->out[s] && queued) {
             k->out[s]->len_known = false;
+            sl_stream_written(k->out[s], SL_WRITER_OUTPUT, s, k->name);
+        }
+    }
+    unsigned mapped = 0;
     for (unsigned a = 0; a < k->n_args && st == SLUICE_OK; ++a) {
         if (!k->arg_map[a])
             continue;
         sluice_stream *m = k->arg_stream[a];
         if (L.n_fixed != SL_NONE) {
             st = sluice_stream_set_length(m, L.n_fixed);
-        } else {
-            cl_int err =
-                clEnqueueCopyBuffer(ctx->queue, ctx->vars, ctx->vars, L.in_var * sizeof(cl_uint),
-                                    m->var * sizeof(cl_uint), sizeof(cl_uint), 0, NULL, NULL);
-            if (err != CL_SUCCESS)
-                st = sl_cl_fail(ctx, err, "copying a mapped output's length");
-            m->len_known = false;
+            continue;
         }
+        if (mapped++ >= L.n_map) /* not set by the launch */
+            st = map_length(ctx, L.in_var, L.in_cap, m->var);
+        m->len_known = false;
+        sl_stream_written(m, SL_WRITER_MAPPED, a, k->name);
     }
     if (ctx->profile && st == SLUICE_OK) {
         sl_profile_slot *slot = &ctx->prof[k->prof_entry];

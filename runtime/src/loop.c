@@ -78,10 +78,10 @@ void sluice_loop_destroy(sluice_loop *l)
 #define SL_LOOP_BATCH 256u
 
 /* Reads the lengths of watched streams not known on the host and the
- * counters in ONE read of the context's variable pool when they lie within
- * SL_LOOP_BATCH entries of each other (the usual case: they were made
- * together), so a pass costs one round trip to the device instead of one per
- * watched value. */
+ * counters (with their overflow note) in ONE read of the context's variable
+ * pool when they lie within SL_LOOP_BATCH entries of each other (the usual
+ * case: they were made together), so a pass costs one round trip to the
+ * device instead of one per watched value. */
 static sluice_status read_batched(sluice_loop *l)
 {
     l->counters_fresh = 0;
@@ -95,8 +95,9 @@ static sluice_status read_batched(sluice_loop *l)
     }
     const sluice_counters *c = l->desc.counters;
     if (c && c->count) {
+        cl_uint note = c->var + (cl_uint)c->count;
         lo = c->var < lo ? c->var : lo;
-        hi = c->var + (cl_uint)c->count - 1 > hi ? c->var + (cl_uint)c->count - 1 : hi;
+        hi = note > hi ? note : hi;
     }
     if (lo > hi || hi - lo >= SL_LOOP_BATCH)
         return SLUICE_OK; /* nothing to read, or too far apart: read one by one */
@@ -111,26 +112,34 @@ static sluice_status read_batched(sluice_loop *l)
             s->len_known = true;
         }
     }
-    if (c && c->count)
+    if (c && c->count) {
         for (size_t i = 0; i < c->count; ++i)
             l->values[l->desc.stream_count + i] = v[c->var - lo + i];
-    l->counters_fresh = c && c->count;
+        l->counters_fresh = 1;
+        return sl_counters_check(l->desc.counters, v[c->var - lo + c->count]);
+    }
     return SLUICE_OK;
 }
 
+/* Reads the watched values. A watched stream past its capacity, or
+ * counters that a kernel reading an overflowed stream counted into, stop the
+ * loop with SLUICE_ERROR_OVERFLOW: found in the values read anyway, at no
+ * extra cost. */
 static sluice_status read_values(sluice_loop *l)
 {
-    sluice_status st0 = read_batched(l);
-    if (st0 != SLUICE_OK)
-        return st0;
+    sluice_status batched = read_batched(l);
+    if (batched != SLUICE_OK && batched != SLUICE_ERROR_OVERFLOW)
+        return batched;
     size_t k = 0;
     for (size_t i = 0; i < l->desc.stream_count; ++i) {
         size_t len;
         sluice_status st = sluice_stream_length(l->desc.streams[i], &len);
         if (st != SLUICE_OK)
-            return st;
+            return st; /* a stream's overflow names the kernel that overflowed */
         l->values[k++] = (uint32_t)len;
     }
+    if (batched != SLUICE_OK)
+        return batched;
     if (l->desc.counters && !l->counters_fresh) {
         sluice_status st = sluice_counters_read(l->desc.counters, l->values + k);
         if (st != SLUICE_OK)
@@ -139,13 +148,25 @@ static sluice_status read_values(sluice_loop *l)
     return SLUICE_OK;
 }
 
+/* Puts "<what> <pass>: " before the message of an overflow, so that it says
+ * which pass left it. */
+static sluice_status name_pass(sluice_context *ctx, sluice_status st, const char *what,
+                               unsigned pass)
+{
+    if (st != SLUICE_ERROR_OVERFLOW)
+        return st;
+    char msg[sizeof ctx->error];
+    memcpy(msg, ctx->error, sizeof msg);
+    return sl_fail(ctx, st, "%s %u: %s", what, pass, msg);
+}
+
 sluice_status sluice_loop_run(sluice_loop *l)
 {
     if (!l)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     sluice_context *ctx = l->ctx;
     l->pass_count = 0;
-    sluice_status st = read_values(l);
+    sluice_status st = name_pass(ctx, read_values(l), "loop, before pass", 0);
     for (unsigned pass = 0; st == SLUICE_OK; ++pass) {
         unsigned choice = 0;
         if (l->desc.oracle) {
@@ -184,6 +205,7 @@ sluice_status sluice_loop_run(sluice_loop *l)
         size_t nv = l->value_count < 16 ? l->value_count : 16;
         memcpy(ps->values, l->values, nv * sizeof *l->values);
         ps->seconds = now_seconds() - t0;
+        st = name_pass(ctx, st, "loop pass", pass);
     }
     return st;
 }

@@ -237,6 +237,12 @@ sluice_status sl_embedded_cl_kernel(sluice_context *ctx, const char *program, co
     return SLUICE_OK;
 }
 
+void sl_set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *err)
+{
+    if (*err == CL_SUCCESS)
+        *err = clSetKernelArg(k, i, size, value);
+}
+
 sluice_status sl_enqueue_raw(sluice_context *ctx, cl_kernel k, const char *name, size_t global,
                              size_t local)
 {

@@ -1,6 +1,7 @@
 /* Streams: device buffers of fixed-size records with a device-side length. */
 #include "internal.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -44,13 +45,15 @@ sluice_status sluice_stream_create(sluice_context *ctx, size_t record_size, size
     s->var = SL_NONE;
     sluice_status st = alloc_records(ctx, record_size, capacity, &s->mem);
     if (st == SLUICE_OK)
-        st = sl_vars_alloc(ctx, 1, &s->var);
+        st = sl_vars_alloc(ctx, 2, &s->var);
     if (st != SLUICE_OK) {
         sluice_stream_destroy(s);
         return st;
     }
     s->len_known = true;
     s->len = 0;
+    s->next_live = ctx->streams;
+    ctx->streams = s;
     *out = s;
     return SLUICE_OK;
 }
@@ -59,9 +62,16 @@ void sluice_stream_destroy(sluice_stream *s)
 {
     if (!s)
         return;
+    for (sluice_stream **p = &s->ctx->streams; *p; p = &(*p)->next_live) {
+        if (*p == s) {
+            *p = s->next_live;
+            break;
+        }
+    }
     if (s->mem)
         clReleaseMemObject(s->mem);
-    sl_vars_free(s->ctx, s->var, 1);
+    if (s->var != SL_NONE)
+        sl_vars_free(s->ctx, s->var, 2);
     free(s);
 }
 
@@ -75,10 +85,94 @@ size_t sluice_stream_capacity(const sluice_stream *s)
     return s ? s->capacity : 0;
 }
 
-sluice_status sluice_stream_length(sluice_stream *s, size_t *length)
+void sl_stream_written(sluice_stream *s, sl_writer_kind kind, unsigned index, const char *name)
 {
-    if (!s || !length)
-        return SLUICE_ERROR_INVALID_ARGUMENT;
+    s->writer_kind = kind;
+    s->writer_index = index;
+    size_t n = strlen(name); /* every launch: no formatting here */
+    n = n < sizeof s->writer ? n : sizeof s->writer - 1;
+    memcpy(s->writer, name, n);
+    s->writer[n] = '\0';
+}
+
+/* Names what last wrote the length of `s` ("output slot 1 of kernel k"). */
+static void describe_writer(const sluice_stream *s, char *buf, size_t size)
+{
+    switch (s->writer_kind) {
+    case SL_WRITER_OUTPUT:
+        snprintf(buf, size, "output slot %u of kernel %s", s->writer_index, s->writer);
+        break;
+    case SL_WRITER_MAPPED:
+        snprintf(buf, size, "the mapped output (argument %u) of kernel %s", s->writer_index,
+                 s->writer);
+        break;
+    case SL_WRITER_ALGORITHM:
+        snprintf(buf, size, "the output of %s", s->writer);
+        break;
+    default:
+        snprintf(buf, size, "a stream");
+        break;
+    }
+}
+
+void sl_describe_overflow(sluice_context *ctx, cl_uint var, char *buf, size_t size)
+{
+    sluice_stream *o = ctx->streams;
+    while (o && o->var != var)
+        o = o->next_live;
+    if (!o) {
+        snprintf(buf, size, "a stream that has since been destroyed had overflowed");
+        return;
+    }
+    char who[128];
+    describe_writer(o, who, sizeof who);
+    cl_uint n = (cl_uint)(o->len_known ? o->len : 0);
+    if (!o->len_known && sl_vars_read(ctx, var, 1, &n) != SLUICE_OK)
+        n = 0;
+    if (n > o->capacity && n != SL_LEN_VOID)
+        snprintf(buf, size, "%u records were emitted into %s, a stream of capacity %zu", n, who,
+                 o->capacity);
+    else
+        snprintf(buf, size,
+                 "more records were emitted into %s than its capacity of %zu (its length has "
+                 "been reset since)",
+                 who, o->capacity);
+}
+
+/* Fails with SLUICE_ERROR_OVERFLOW for `s`, whose length is known and past
+ * its capacity, naming the kernel and output and the counts. */
+static sluice_status overflow(sluice_stream *s, const char *prefix)
+{
+    char what[640];
+    if (s->len != SL_LEN_VOID) {
+        char who[128];
+        describe_writer(s, who, sizeof who);
+        snprintf(what, sizeof what, "%zu records were emitted into %s, a stream of capacity %zu",
+                 s->len, who, s->capacity);
+    } else {
+        /* Void: written by a launch whose input had overflowed. The second
+         * variable says which stream overflowed. */
+        cl_uint origin = SL_NONE;
+        char first[384], who[128];
+        if (sl_vars_read(s->ctx, s->var + 1, 1, &origin) == SLUICE_OK)
+            sl_describe_overflow(s->ctx, origin, first, sizeof first);
+        else
+            snprintf(first, sizeof first, "an input stream had overflowed");
+        describe_writer(s, who, sizeof who);
+        snprintf(what, sizeof what, "%s; %s, written from it, is void", first, who);
+    }
+    return sl_fail(s->ctx, SLUICE_ERROR_OVERFLOW, "%sstream overflowed: %s", prefix, what);
+}
+
+sluice_status sl_stream_check_known(sluice_stream *s, const char *prefix)
+{
+    return s->len_known && s->len > s->capacity ? overflow(s, prefix) : SLUICE_OK;
+}
+
+/* Makes the length of `s` known on the host, reading it when it is only on
+ * the device; s->len may then be past the capacity. */
+static sluice_status read_length(sluice_stream *s)
+{
     if (!s->len_known) {
         cl_uint v;
         sluice_status st = sl_vars_read(s->ctx, s->var, 1, &v);
@@ -87,8 +181,32 @@ sluice_status sluice_stream_length(sluice_stream *s, size_t *length)
         s->len = v;
         s->len_known = true;
     }
-    *length = s->len;
     return SLUICE_OK;
+}
+
+sluice_status sl_stream_length(sluice_stream *s, const char *prefix)
+{
+    sluice_status st = read_length(s);
+    return st == SLUICE_OK ? sl_stream_check_known(s, prefix) : st;
+}
+
+sluice_status sl_stream_overflowed(sluice_stream *s, const char *prefix)
+{
+    s->len_known = false;
+    sluice_status st = sl_stream_length(s, prefix);
+    return st == SLUICE_OK ? sl_fail(s->ctx, SLUICE_ERROR_OVERFLOW,
+                                     "%sstream overflowed before it was read", prefix)
+                           : st;
+}
+
+sluice_status sluice_stream_length(sluice_stream *s, size_t *length)
+{
+    if (!s || !length)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    sluice_status st = sl_stream_length(s, "");
+    if (st == SLUICE_OK || st == SLUICE_ERROR_OVERFLOW)
+        *length = s->len == SL_LEN_VOID ? 0 : s->len;
+    return st;
 }
 
 sluice_status sluice_stream_set_length(sluice_stream *s, size_t length)
@@ -134,11 +252,11 @@ sluice_status sluice_stream_download(sluice_stream *s, void *records, size_t max
 {
     if (!s || (max && !records))
         return SLUICE_ERROR_INVALID_ARGUMENT;
-    size_t len;
-    sluice_status st = sluice_stream_length(s, &len);
-    if (st != SLUICE_OK)
+    /* An overflowed stream still gives the records it holds (none when void). */
+    sluice_status st = sl_stream_length(s, "");
+    if (st != SLUICE_OK && st != SLUICE_ERROR_OVERFLOW)
         return st;
-    size_t n = len < s->capacity ? len : s->capacity;
+    size_t n = s->len == SL_LEN_VOID ? 0 : s->len < s->capacity ? s->len : s->capacity;
     if (n > max)
         n = max;
     if (n) {
@@ -149,11 +267,7 @@ sluice_status sluice_stream_download(sluice_stream *s, void *records, size_t max
     }
     if (count)
         *count = n;
-    if (len > s->capacity)
-        return sl_fail(s->ctx, SLUICE_ERROR_OVERFLOW,
-                       "stream overflowed: %zu records were emitted into a capacity of %zu", len,
-                       s->capacity);
-    return SLUICE_OK;
+    return st;
 }
 
 sluice_status sluice_stream_grow(sluice_stream *s, size_t capacity)
@@ -166,10 +280,10 @@ sluice_status sluice_stream_grow(sluice_stream *s, size_t capacity)
     sluice_status st = alloc_records(s->ctx, s->record_size, capacity, &m);
     if (st != SLUICE_OK)
         return st;
-    size_t len;
-    st = sluice_stream_length(s, &len);
-    if (st == SLUICE_OK && len > s->capacity)
-        len = s->capacity;
+    /* An overflowed stream holds only part of what was emitted into it: it
+     * is grown empty, to be filled again. */
+    st = read_length(s);
+    size_t len = s->len > s->capacity ? 0 : s->len;
     if (st == SLUICE_OK && len) {
         cl_int err = clEnqueueCopyBuffer(s->ctx->queue, s->mem, m, 0, 0, len * s->record_size, 0,
                                          NULL, NULL);
@@ -194,9 +308,12 @@ sluice_status sluice_stream_swap(sluice_stream *a, sluice_stream *b)
         return sl_fail(a->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                        "cannot swap streams with records of %zu and %zu bytes", a->record_size,
                        b->record_size);
+    sluice_stream *link_a = a->next_live, *link_b = b->next_live;
     sluice_stream t = *a;
     *a = *b;
     *b = t;
+    a->next_live = link_a;
+    b->next_live = link_b;
     return SLUICE_OK;
 }
 

@@ -29,6 +29,20 @@
  *             stream length is non-zero, optionally asking an oracle which pass
  *             to run next from the current counts.
  *
+ * Overflow
+ *   An output stream that receives more records than its capacity keeps the
+ *   ones that fit and a length past its capacity: it has overflowed, and that
+ *   is always an error, never a silent truncation. Wherever the length is
+ *   read (sluice_stream_length, sluice_stream_download, the watched values of
+ *   a loop, the stream algorithms) the result is SLUICE_ERROR_OVERFLOW, and
+ *   the message names the kernel, the output slot, the stream's capacity and
+ *   the records emitted. A launch refuses an input whose length is known to
+ *   be past its capacity; when the length is only on the device, the launch
+ *   reads no records and makes its outputs (and the counters it counts into)
+ *   *void*, so the overflow is reported wherever they are read next, with the
+ *   same message. None of this costs a round trip: the checks ride on the
+ *   reads that happen anyway.
+ *
  * Conventions
  *   Every function that can fail returns a sluice_status; SLUICE_OK is 0.
  *   On failure the context keeps a readable message: sluice_context_error().
@@ -164,7 +178,12 @@ size_t sluice_stream_record_size(const sluice_stream *stream);
 size_t sluice_stream_capacity(const sluice_stream *stream);
 
 /** Reads the current length. When the length lives on the device this waits
- *  for the work queued before it (not for work queued after). */
+ *  for the work queued before it (not for work queued after). A length past
+ *  the capacity (an overflowed output) returns SLUICE_ERROR_OVERFLOW, with
+ *  `*length` the number of records emitted into it; a void stream (written
+ *  from an overflowed input) returns it with `*length` 0. The message names
+ *  the kernel and output slot that overflowed, the capacity and the records
+ *  emitted. Until it is cleared, set or grown, the stream stays overflowed. */
 sluice_status sluice_stream_length(sluice_stream *stream, size_t *length);
 
 /** Queues setting the length to `length` (at most the capacity). The records
@@ -180,13 +199,16 @@ sluice_status sluice_stream_upload(sluice_stream *stream, const void *records, s
 
 /** Copies the stream's records (at most `max` of them) to host memory and
  *  writes their number to `*count` (may be NULL). Blocks until done. Returns
- *  SLUICE_ERROR_OVERFLOW if an unordered or ordered output overflowed (length
- *  above capacity); the first `capacity` records are still copied. */
+ *  SLUICE_ERROR_OVERFLOW, as sluice_stream_length does, if the stream
+ *  overflowed; the first `capacity` records (none of a void stream) are
+ *  still copied. */
 sluice_status sluice_stream_download(sluice_stream *stream, void *records, size_t max,
                                      size_t *count);
 
 /** Reallocates to at least `capacity` records, keeping records and length.
- *  Never shrinks. */
+ *  Never shrinks. A stream that overflowed (or is void) holds only part of
+ *  what was emitted into it: it is grown empty (length 0), ready for the
+ *  kernel that fills it to run again. */
 sluice_status sluice_stream_grow(sluice_stream *stream, size_t capacity);
 
 /** Exchanges the contents (buffers, lengths, capacities) of two streams of the
@@ -290,7 +312,10 @@ sluice_status sluice_kernel_set_counters(sluice_kernel *kernel, sluice_counters 
 
 /** Queues one launch over the input stream. Returns when queued, not when
  *  done. Fails if an argument is unset or an output is too small to ever
- *  hold the result of a mapped output. */
+ *  hold the result of a mapped output, and with SLUICE_ERROR_OVERFLOW if the
+ *  input's length is known to be past its capacity. An input whose length is
+ *  only on the device and turns out past its capacity is read as empty and
+ *  the launch's outputs and counters become void (see "Overflow" above). */
 sluice_status sluice_kernel_launch(sluice_kernel *kernel);
 
 /** Queues one launch over `count` records without an input stream (a
@@ -322,7 +347,9 @@ int sluice_counters_index(const sluice_counters *counters, const char *name);
 sluice_status sluice_counters_reset(sluice_counters *counters);
 
 /** Reads all counters into `values` (sluice_counters_count() entries). Waits
- *  only for the work queued before the call. */
+ *  only for the work queued before the call. Returns SLUICE_ERROR_OVERFLOW
+ *  when, since the last reset, a kernel counting into them read an
+ *  overflowed input (so it counted nothing). */
 sluice_status sluice_counters_read(sluice_counters *counters, uint32_t *values);
 
 /* ------------------------------------------------------------------ */
@@ -375,8 +402,13 @@ void sluice_loop_destroy(sluice_loop *loop);
  * Runs the loop: before each pass, the oracle (if any) picks a choice from the
  * watched values of the previous pass (all values are read before the first
  * pass too); without an oracle the loop goes on while any watched value is
- * non-zero. Stops with SLUICE_ERROR_LIMIT after max_passes passes. Per-pass
- * statistics of the last run are kept until the next run.
+ * non-zero. Stops with SLUICE_ERROR_LIMIT after max_passes passes. Stops
+ * with SLUICE_ERROR_OVERFLOW after the first pass that leaves a watched
+ * stream overflowed or void, or the watched counters void, or whose pass
+ * function returns it; the message starts with "loop pass N: " (or "loop,
+ * before pass 0: ") and names the kernel, the output slot, the capacity and
+ * the records emitted. Per-pass statistics of the last run are kept until
+ * the next run.
  */
 sluice_status sluice_loop_run(sluice_loop *loop);
 

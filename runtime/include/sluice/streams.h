@@ -8,6 +8,13 @@
  * are overwritten (not appended) and their lengths set, unless said
  * otherwise. Scratch memory is allocated per call and released before return
  * (OpenCL keeps it alive until the queued work is done).
+ *
+ * An input that overflowed (its length past its capacity) is never read as
+ * truncated: a function that reads the length on the host returns
+ * SLUICE_ERROR_OVERFLOW naming where the overflow happened; one that only
+ * queues work (compaction, split, partition, scan without a total) makes its
+ * outputs void, so reading them reports the same overflow. An output too
+ * small for the result is SLUICE_ERROR_OVERFLOW as well.
  */
 #ifndef SLUICE_STREAMS_H
 #define SLUICE_STREAMS_H
