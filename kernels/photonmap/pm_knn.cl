@@ -13,20 +13,19 @@
  * outputs, since an emitting body runs twice. */
 #include "sluice.cl"
 
-/* Squared distance from x to the slab of cells j0 .. j1 of an axis of n
- * cells, shrunk by the margin. The boundary cells reach to infinity: points
+/* Squared distance from x to the slab of cell j of an axis of n cells,
+ * shrunk by the margin. The boundary cells reach to infinity: points
  * outside the box are clamped into them. */
-static inline float pm_gap2_range(float x, int j0, int j1, int n, float lo, float cell,
-                                  float margin)
+static inline float pm_gap2(float x, int j, int n, float lo, float cell, float margin)
 {
     float gap = 0.0f;
-    if (j0 > 0) {
-        float l = lo + (float)j0 * cell;
+    if (j > 0) {
+        float l = lo + (float)j * cell;
         if (x < l)
             gap = l - x;
     }
-    if (j1 < n - 1) {
-        float h = lo + (float)(j1 + 1) * cell;
+    if (j < n - 1) {
+        float h = lo + (float)(j + 1) * cell;
         if (x > h)
             gap = x - h;
     }
@@ -262,44 +261,34 @@ __kernel void pm_knn_init(SLUICE_PARAMS, global pm_knn_result *results, global u
     }
 }
 
-/* Scans one row of cells along x, [x0, x1] at (y, z), as one run of
- * photons trimmed to the cells within sqrt(t) of the query (t: the bound
- * less the row's gap across y and z). An empty row costs two reads. */
-static inline void pm_scan_row(pm_state *st, int x0, int x1, int y, int z, float t, const int *n,
-                               const pg_params *g, const pm_knn_params *p, uint exact,
-                               global const pm_photon *map, global const uint *map_start,
-                               global const uint *cell_count, global uint *indices)
-{
-    uint row = (uint)n[0] * ((uint)y + (uint)n[1] * (uint)z);
-    uint last = row + (uint)x1;
-    if (map_start[row + (uint)x0] == map_start[last] + cell_count[last])
-        return;
-    pm_trim(st->px, t, g->lo[0], g->inv_cell[0], g->dims[0], p->margin[0], &x0, &x1);
-    if (x0 > x1)
-        return;
-    pm_scan_run(st, map_start[row + (uint)x0],
-                map_start[row + (uint)x1] + cell_count[row + (uint)x1], p, exact, map, indices);
-}
-
-/* Scans the cells [b0, b1] (inclusive, within the grid) row by row along x,
- * skipping rows out of reach of the bound. (Splitting sparse boxes by the
- * summed counts instead was measured slower, on glassball's planar grid
- * too.) */
+/* Scans the cells [b0, b1] (inclusive, within the grid) row by row along x:
+ * a row's cells are one run of photons, trimmed to the cells within reach of
+ * the bound; an empty row costs two reads. */
 static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const int *n,
                                const pg_params *g, const pm_knn_params *p, uint exact,
                                global const pm_photon *map, global const uint *map_start,
                                global const uint *cell_count, global uint *indices)
 {
     for (int z = b0[2]; z <= b1[2]; ++z) {
-        float rz = pm_gap2_range(st->pz, z, z, n[2], g->lo[2], g->cell[2], p->margin[2]);
-        if (rz > pm_bound(st, p, exact))
+        float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2]);
+        if (gz > pm_bound(st, p, exact))
             continue;
         for (int y = b0[1]; y <= b1[1]; ++y) {
-            float t = pm_bound(st, p, exact) - rz -
-                      pm_gap2_range(st->py, y, y, n[1], g->lo[1], g->cell[1], p->margin[1]);
-            if (t >= 0.0f)
-                pm_scan_row(st, b0[0], b1[0], y, z, t, n, g, p, exact, map, map_start, cell_count,
-                            indices);
+            uint row = (uint)n[0] * ((uint)y + (uint)n[1] * (uint)z);
+            uint last = row + (uint)b1[0];
+            if (map_start[row + (uint)b0[0]] == map_start[last] + cell_count[last])
+                continue;
+            float t = pm_bound(st, p, exact) - gz -
+                      pm_gap2(st->py, y, n[1], g->lo[1], g->cell[1], p->margin[1]);
+            if (t < 0.0f)
+                continue;
+            int xa = b0[0], xb = b1[0];
+            pm_trim(st->px, t, g->lo[0], g->inv_cell[0], g->dims[0], p->margin[0], &xa, &xb);
+            if (xa > xb)
+                continue;
+            pm_scan_run(st, map_start[row + (uint)xa],
+                        map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, exact, map,
+                        indices);
         }
     }
 }
@@ -344,7 +333,6 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
         }
         int s = (int)r.shells, covered = 0, done = 0, full = 0;
         float reach = 0.0f;
-        /* up to shells_per_pass shells that hold photons (Purcell: one) */
         for (uint step = 0u; !done && (p.shells_per_pass == 0u || step < p.shells_per_pass);
              ++step) {
             if (step)
