@@ -319,6 +319,8 @@ static void test_cli(const char *exe)
         {"--slots 0", "--slots"},
         {"--out a.bmp", "--out"},
         {"--pass-images frames", "--pass-images"},
+        {"--shells-per-pass 0", "--shells-per-pass"},
+        {"--shells-per-pass some", "--shells-per-pass"},
         {"--time x", "--time"},
         {"--frobnicate 1", "--frobnicate"},
         {"--scene no-such-scene.obj", "no-such-scene.obj"},
