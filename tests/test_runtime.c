@@ -46,7 +46,7 @@ static const char *kernels_src =
     "    SLUICE_FOR_EACH_RANGE(b, e) {\n"
     "        uint i = b;\n"
     "        for (; i + 16u <= e; i += 16u) {\n"
-    "            uint16 x = vload16(0, in + i);\n"
+    "            uint16 x = SLUICE_LOAD16(in + i);\n"
     "            SLUICE_EMIT16(0, out, x, sluice_mask16(as_int16(x < (uint16)100u)));\n"
     "        }\n"
     "        for (; i < e; ++i)\n"

@@ -33,18 +33,20 @@ static int is_sluice_include(const char *line, size_t len)
                                strncmp(line + i, "<sluice.cl>", 11) == 0);
 }
 
-/* The text handed to the compiler: the embedded sluice.cl, a #line directive
- * so that messages name the user's file and line, then the user's source with
- * its include lines of sluice.cl blanked (line numbers stay right). */
+/* The text handed to the compiler: the embedded sluice.cl, then the user's
+ * source with its include lines of sluice.cl blanked (line numbers stay
+ * right). A #line directive before each names its file, so that messages say
+ * sluice.cl:LINE or the user's file:LINE. */
 static char *compose_source(const char *name, const char *source)
 {
     const char *header = sl_embedded_find("sluice.cl");
     size_t hl = header ? strlen(header) : 0, sl = strlen(source), nl = strlen(name);
-    char *out = malloc(hl + sl + nl + 64);
+    char *out = malloc(hl + sl + nl + 96);
     if (!out)
         return NULL;
     char *p = out;
     if (header) {
+        p += sprintf(p, "#line 1 \"sluice.cl\"\n");
         memcpy(p, header, hl);
         p += hl;
     }
