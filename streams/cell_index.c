@@ -37,6 +37,7 @@ sluice_status sluice_cell_index_search(sluice_context *ctx, sluice_stream *sorte
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     size_t n = 0;
     sluice_status st = prepare(ctx, "sluice_cell_index_search", sorted_keys, cell_count, start, &n);
     if (st != SLUICE_OK)
@@ -62,6 +63,7 @@ sluice_status sluice_cell_index_count(sluice_context *ctx, sluice_stream *keys, 
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     size_t n = 0;
     sluice_status st = prepare(ctx, "sluice_cell_index_count", keys, cell_count, start, &n);
     if (st != SLUICE_OK)

@@ -39,6 +39,7 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     if (!in || !result)
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "sluice_reduce: NULL %s",
                        !in ? "input stream" : "result");

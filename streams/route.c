@@ -13,6 +13,7 @@ sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, slu
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_route_bounded", "keys", NULL);
     if (st == SLUICE_OK)
         st = sl_check_u32_stream(ctx, values, "sluice_route_bounded", "values", NULL);

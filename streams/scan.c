@@ -53,6 +53,7 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     if (!in || !out)
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "sluice_scan: NULL %s stream",
                        !in ? "input" : "output");

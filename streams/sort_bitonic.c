@@ -29,6 +29,7 @@ sluice_status sluice_sort_bitonic(sluice_context *ctx, sluice_stream *keys, slui
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     size_t n = 0, nv = 0;
     sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_sort_bitonic", "keys", &n);
     if (st != SLUICE_OK)

@@ -27,6 +27,7 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     size_t n = 0, nv = 0;
     sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_sort_radix", "keys", &n);
     if (st != SLUICE_OK)

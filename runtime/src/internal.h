@@ -73,6 +73,7 @@ struct sluice_context {
     /* Profiling. */
     int profile;
     int no_simd; /* programs are built with -DSLUICE_NO_SIMD */
+    int verbose; /* builds print their compiler log on stderr */
     sl_profile_slot *prof;
     size_t prof_count, prof_cap;
     sl_pending_event *pending;
@@ -143,6 +144,15 @@ struct sluice_kernel {
     size_t prof_entry;
     struct sluice_kernel *next_live;
 };
+
+/* Empties the context's error message (ctx may be NULL). Every public
+ * function that can fail with a message does this first, so that the
+ * message is the last call's: "" after a call that succeeded. */
+static inline void sl_clear_error(sluice_context *ctx)
+{
+    if (ctx)
+        ctx->error[0] = 0;
+}
 
 /* Sets the context's error message and returns `status`. */
 sluice_status sl_fail(sluice_context *ctx, sluice_status status, const char *fmt, ...)

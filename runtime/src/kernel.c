@@ -12,6 +12,7 @@
 
 sluice_status sluice_kernel_create(sluice_program *program, const char *name, sluice_kernel **out)
 {
+    sl_clear_error(program ? program->ctx : NULL);
     if (out)
         *out = NULL;
     if (!program || !name || !out)
@@ -133,6 +134,7 @@ sluice_status sluice_kernel_set_input(sluice_kernel *k, unsigned arg, sluice_str
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     if (k->input) /* one input stream per kernel (Purcell 3.1.1) */
         k->input = NULL;
     sluice_status st = bind_stream(k, arg, stream);
@@ -148,6 +150,7 @@ sluice_status sluice_kernel_set_output(sluice_kernel *k, unsigned arg, unsigned 
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     if (slot >= SLUICE_MAX_OUTPUTS)
         return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                        "kernel %s: output slot %u is out of range (0..%u)", k->name, slot,
@@ -171,6 +174,7 @@ sluice_status sluice_kernel_set_stream(sluice_kernel *k, unsigned arg, sluice_st
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     sluice_status st = bind_stream(k, arg, stream);
     if (st == SLUICE_OK)
         k->arg_map[arg] = map_output ? 1 : 0;
@@ -181,6 +185,7 @@ sluice_status sluice_kernel_set_arg(sluice_kernel *k, unsigned arg, size_t size,
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     sluice_status st = check_arg(k, arg);
     if (st != SLUICE_OK)
         return st;
@@ -202,6 +207,7 @@ sluice_status sluice_kernel_set_counters(sluice_kernel *k, sluice_counters *coun
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     if (counters && counters->ctx != k->ctx)
         return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                        "kernel %s: counters belong to another context", k->name);
@@ -283,6 +289,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     sluice_context *ctx = k->ctx;
     if (!has_count && !k->input)
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,

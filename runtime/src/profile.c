@@ -118,6 +118,7 @@ sluice_status sluice_profile_get(sluice_context *ctx, size_t index, sluice_profi
 {
     if (!ctx || !entry)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     sluice_status st = sl_profile_sync(ctx);
     if (st != SLUICE_OK)
         return st;
@@ -132,6 +133,7 @@ sluice_status sluice_profile_print(sluice_context *ctx, FILE *out)
 {
     if (!ctx || !out)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     if (!ctx->profile) {
         fprintf(out, "profiling is off (set SLUICE_PROFILE=1 or the profile option)\n");
         return SLUICE_OK;
@@ -174,6 +176,7 @@ sluice_status sluice_profile_write_json(sluice_context *ctx, const char *path)
 {
     if (!ctx || !path)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     sluice_status st = sl_profile_sync(ctx);
     if (st != SLUICE_OK)
         return st;

@@ -1,9 +1,11 @@
 /* Programs: OpenCL C source built lazily, once. */
 #include "internal.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 const char *sl_embedded_find(const char *name)
 {
@@ -74,6 +76,7 @@ sluice_status sluice_program_create_source(sluice_context *ctx, const char *name
                                            const char *source, const char *options,
                                            sluice_program **out)
 {
+    sl_clear_error(ctx);
     if (out)
         *out = NULL;
     if (!ctx || !source || !out)
@@ -100,6 +103,7 @@ sluice_status sluice_program_create_source(sluice_context *ctx, const char *name
 sluice_status sluice_program_create_file(sluice_context *ctx, const char *path, const char *options,
                                          sluice_program **out)
 {
+    sl_clear_error(ctx);
     if (out)
         *out = NULL;
     if (!ctx || !path || !out)
@@ -157,10 +161,72 @@ void sluice_program_destroy(sluice_program *p)
     free(p);
 }
 
+/* Is this the line clang prints on stderr after compiling a source with
+ * diagnostics ("2 warnings generated.", "1 warning and 1 error generated.")?
+ * PoCL sends the diagnostics themselves to the build log, not this count. */
+static bool is_compiler_summary(const char *line, size_t len)
+{
+    static const char tail[] = " generated.";
+    const size_t tl = sizeof tail - 1;
+    while (len && (line[len - 1] == '\n' || line[len - 1] == '\r'))
+        --len;
+    return len > tl && isdigit((unsigned char)line[0]) && memcmp(line + len - tl, tail, tl) == 0 &&
+           (strstr(line, " warning") != NULL || strstr(line, " error") != NULL);
+}
+
+/* Standard error (file descriptor 2) sent to a temporary file while the
+ * compiler runs: clang writes its summary line there itself. */
+typedef struct stderr_capture {
+    FILE *file; /* NULL: nothing captured (stderr left alone) */
+    int saved;  /* the real stderr */
+} stderr_capture;
+
+static void capture_begin(stderr_capture *c)
+{
+    c->file = NULL;
+    c->saved = -1;
+    fflush(stderr);
+    FILE *f = tmpfile();
+    if (!f)
+        return; /* no temporary file: the compiler's chatter gets through */
+    int saved = dup(STDERR_FILENO);
+    if (saved >= 0 && dup2(fileno(f), STDERR_FILENO) >= 0) {
+        c->file = f;
+        c->saved = saved;
+        return;
+    }
+    if (saved >= 0)
+        close(saved);
+    fclose(f);
+}
+
+/* Restores stderr and writes to it what was captured: all of it when
+ * `everything`, else all but the compiler's summary lines (what other code,
+ * or another thread, wrote meanwhile is passed on, not lost). */
+static void capture_end(stderr_capture *c, bool everything)
+{
+    if (!c->file)
+        return;
+    fflush(stderr);
+    dup2(c->saved, STDERR_FILENO);
+    close(c->saved);
+    rewind(c->file);
+    char *line = NULL;
+    size_t cap = 0;
+    ssize_t len;
+    while ((len = getline(&line, &cap, c->file)) > 0)
+        if (everything || !is_compiler_summary(line, (size_t)len))
+            fwrite(line, 1, (size_t)len, stderr);
+    free(line);
+    fclose(c->file);
+    c->file = NULL;
+}
+
 sluice_status sluice_program_build(sluice_program *p)
 {
     if (!p)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(p->ctx);
     if (p->cl)
         return SLUICE_OK;
     sluice_context *ctx = p->ctx;
@@ -176,7 +242,10 @@ sluice_status sluice_program_build(sluice_program *p)
         return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
     }
     snprintf(opts, ol, "-cl-std=CL1.2%s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "", p->options);
+    stderr_capture capture;
+    capture_begin(&capture);
     err = clBuildProgram(prog, 1, &ctx->device, opts, NULL, NULL);
+    capture_end(&capture, err != CL_SUCCESS || ctx->verbose);
     free(opts);
     size_t log_size = 0;
     clGetProgramBuildInfo(prog, ctx->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &log_size);
@@ -187,6 +256,11 @@ sluice_status sluice_program_build(sluice_program *p)
         log[log_size] = 0;
         free(p->log);
         p->log = log;
+    }
+    if (ctx->verbose && p->log && p->log[0]) {
+        size_t n = strlen(p->log);
+        fprintf(stderr, "sluice: build log of %s:\n%s%s", p->name, p->log,
+                p->log[n - 1] == '\n' ? "" : "\n");
     }
     if (err != CL_SUCCESS) {
         clReleaseProgram(prog);

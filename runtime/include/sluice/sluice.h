@@ -45,7 +45,8 @@
  *
  * Conventions
  *   Every function that can fail returns a sluice_status; SLUICE_OK is 0.
- *   On failure the context keeps a readable message: sluice_context_error().
+ *   On failure the context keeps a readable message, sluice_context_error(),
+ *   until the next call (which empties it first).
  *   Nothing in the library aborts or exits. Handles are opaque and come in
  *   create/destroy pairs; destroy functions accept NULL. Objects are not
  *   thread-safe: use one context per thread, or lock around it.
@@ -118,6 +119,11 @@ typedef struct sluice_context_options {
      *  use only portable OpenCL C and no device-specific fast paths (see
      *  SLUICE_EMIT16 in sluice.cl). Also enabled by SLUICE_NO_SIMD=1. */
     int no_simd;
+    /** Non-zero: every program build prints its compiler log (warnings
+     *  included) and the compiler's own output on stderr. Otherwise a build
+     *  that succeeds prints nothing: its warnings stay in
+     *  sluice_program_build_log(). Also enabled by SLUICE_VERBOSE=1. */
+    int verbose;
 } sluice_context_options;
 
 typedef struct sluice_context sluice_context;
@@ -134,7 +140,10 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
  *  kernel, counter set and loop made from it must be destroyed first. */
 void sluice_context_destroy(sluice_context *ctx);
 
-/** The message of the last error seen by this context ("" when none). */
+/** The message of the last call that failed, and only until the next call:
+ *  every function that can fail with a message empties it when it starts,
+ *  so after a call that succeeded it is "". Read it right after the failing
+ *  call (like errno, but cleared on success). */
 const char *sluice_context_error(const sluice_context *ctx);
 
 /** Describes the context's device. */
@@ -246,12 +255,24 @@ sluice_status sluice_program_create_file(sluice_context *ctx, const char *path, 
 /** Frees the program. Kernels made from it must be destroyed first. */
 void sluice_program_destroy(sluice_program *program);
 
-/** Compiles now if not yet compiled. A compile error returns
- *  SLUICE_ERROR_BUILD; the compiler's log (with file and line) is then in
- *  sluice_program_build_log() and the context's error message. */
+/**
+ * Compiles now if not yet compiled. A compile error returns
+ * SLUICE_ERROR_BUILD; the compiler's log (with file and line) is then in
+ * sluice_program_build_log() and the context's error message.
+ *
+ * A build that succeeds prints nothing, warnings or not: they are in the
+ * build log. (With the verbose option or SLUICE_VERBOSE=1 the log is printed
+ * on stderr after every build.) PoCL's compiler writes a count of its
+ * diagnostics ("2 warnings generated.") straight to the process's stderr,
+ * so while it runs, file descriptor 2 goes to a temporary file; afterwards
+ * everything written there meanwhile, by any thread, is passed on to stderr
+ * except that count, which is passed on too when the build failed.
+ */
 sluice_status sluice_program_build(sluice_program *program);
 
-/** The compiler log of the last build ("" before a build). */
+/** The compiler log of the last build, warnings and errors with file and
+ *  line ("" before a build, or when the compiler had nothing to say). Kept
+ *  until the program is destroyed. */
 const char *sluice_program_build_log(const sluice_program *program);
 
 /* ------------------------------------------------------------------ */
