@@ -2,6 +2,7 @@
  * outputs (ordered and unordered), counters, loops, profiling and errors,
  * against plain C references. */
 #include "check.h"
+#include "sluice/streams.h"
 
 #include <math.h>
 #include <string.h>
@@ -756,6 +757,127 @@ static void test_errors(sluice_context *ctx)
           "status string");
 }
 
+/* Finds the profile entry called `name`; 0 when there is none. */
+static int profile_find(sluice_context *ctx, const char *name, sluice_profile_entry *e)
+{
+    size_t count = sluice_profile_count(ctx);
+    for (size_t i = 0; i < count; ++i)
+        if (sluice_profile_get(ctx, i, e) == SLUICE_OK && strcmp(e->name, name) == 0)
+            return 1;
+    return 0;
+}
+
+/* The profile lists the kernels that ran, and only those, in the order of
+ * their first launch; counts the records of a stream algorithm's kernels,
+ * also when the input's length is only on the device; and counts mapped
+ * outputs in the bytes. */
+static void test_profile_rows(sluice_context *ctx, sluice_program *p)
+{
+    sluice_profile_reset(ctx);
+    CHECK(sluice_profile_count(ctx) == 0, "no entry after a reset");
+    sluice_kernel *idle = NULL, *scale = NULL, *split = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "dup", &idle)); /* made, never launched */
+    CHECK_OK(ctx, sluice_kernel_create(p, "scale", &scale));
+    CHECK_OK(ctx, sluice_kernel_create(p, "split3", &split));
+    enum { N = 3000, THIRDS = 1000 }; /* the multiples of 3 below N */
+    uint32_t *v = malloc(N * sizeof *v);
+    for (uint32_t i = 0; i < N; ++i)
+        v[i] = i;
+    sluice_stream *in = NULL, *mapped = NULL, *out[3] = {NULL, NULL, NULL}, *scanned = NULL;
+    sluice_counters *cn = NULL;
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, N, &in));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, N, &mapped));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, N, &scanned));
+    CHECK_OK(ctx, sluice_counters_create(ctx, 2, NULL, &cn));
+    CHECK_OK(ctx, sluice_stream_upload(in, v, N));
+    float kf = 2.0f;
+    CHECK_OK(ctx, sluice_kernel_set_input(scale, 0, in));
+    CHECK_OK(ctx, sluice_kernel_set_stream(scale, 1, mapped, 1));
+    CHECK_OK(ctx, sluice_kernel_set_arg(scale, 2, sizeof kf, &kf));
+    CHECK_OK(ctx, sluice_kernel_launch(scale));
+    CHECK_OK(ctx, sluice_kernel_set_input(split, 0, in));
+    for (unsigned j = 0; j < 3; ++j) {
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, N, &out[j]));
+        CHECK_OK(ctx, sluice_kernel_set_output(split, 1 + j, j, out[j], SLUICE_ORDERED));
+    }
+    CHECK_OK(ctx, sluice_kernel_set_counters(split, cn));
+    CHECK_OK(ctx, sluice_kernel_launch(split));
+    /* out[0]'s length is only on the device: the scan's kernels read it there. */
+    CHECK_OK(ctx, sluice_scan(ctx, out[0], scanned, SLUICE_U32, 0, NULL));
+    CHECK_OK(ctx, sluice_scan(ctx, in, scanned, SLUICE_U32, 0, NULL));
+
+    size_t count = sluice_profile_count(ctx);
+    sluice_profile_entry e;
+    CHECK(count == 6,
+          "6 kernels ran (scale, split3, sluice_scan_chunk_counts, 3 scan passes), "
+          "the profile has %zu entries",
+          count);
+    for (size_t i = 0; i < count; ++i) {
+        CHECK_OK(ctx, sluice_profile_get(ctx, i, &e));
+        CHECK(e.launches > 0 && strcmp(e.name, "dup") != 0, "entry %zu: %s, %llu launches", i,
+              e.name, (unsigned long long)e.launches);
+    }
+    CHECK(sluice_profile_get(ctx, 0, &e) == SLUICE_OK && strcmp(e.name, "scale") == 0,
+          "entries in the order of the first launch: %s first", e.name);
+    CHECK(profile_find(ctx, "scale", &e) && e.records_in == N && e.bytes == 8u * N,
+          "scale: %llu records in, %llu bytes (input and mapped output: %d)",
+          (unsigned long long)e.records_in, (unsigned long long)e.bytes, 8 * N);
+    CHECK(profile_find(ctx, "split3", &e) && e.records_in == N && e.records_out == N &&
+              e.bytes == 8u * N,
+          "split3: %llu in, %llu out, %llu bytes", (unsigned long long)e.records_in,
+          (unsigned long long)e.records_out, (unsigned long long)e.bytes);
+    CHECK(profile_find(ctx, "scan_sums_u32", &e) && e.launches == 2 && e.records_in == THIRDS + N &&
+              e.bytes == 4u * (THIRDS + N),
+          "scan_sums_u32: %llu launches, %llu records in (want %d), %llu bytes",
+          (unsigned long long)e.launches, (unsigned long long)e.records_in, THIRDS + N,
+          (unsigned long long)e.bytes);
+    CHECK(profile_find(ctx, "scan_apply_u32", &e) && e.records_in == THIRDS + N &&
+              e.bytes == 8u * (THIRDS + N),
+          "scan_apply_u32: %llu records in, %llu bytes", (unsigned long long)e.records_in,
+          (unsigned long long)e.bytes);
+    CHECK(profile_find(ctx, "scan_chunks_u32", &e) && e.records_in > 0,
+          "scan_chunks_u32: %llu records in", (unsigned long long)e.records_in);
+    CHECK(profile_find(ctx, "sluice_scan_chunk_counts", &e) && e.records_in > 0,
+          "sluice_scan_chunk_counts: %llu records in", (unsigned long long)e.records_in);
+
+    /* The printed table and the JSON have the same rows. */
+    FILE *f = tmpfile();
+    char table[8192] = {0};
+    CHECK_OK(ctx, sluice_profile_print(ctx, f));
+    rewind(f);
+    table[fread(table, 1, sizeof table - 1, f)] = 0;
+    fclose(f);
+    CHECK(strstr(table, "scan_sums_u32") && !strstr(table, "dup"), "table:\n%s", table);
+    CHECK_OK(ctx, sluice_profile_write_json(ctx, "test_runtime_profile_rows.json"));
+    char json[8192] = {0};
+    f = fopen("test_runtime_profile_rows.json", "r");
+    if (f) {
+        json[fread(json, 1, sizeof json - 1, f)] = 0;
+        fclose(f);
+    }
+    CHECK(strstr(json, "\"scan_apply_u32\"") && !strstr(json, "\"dup\"") &&
+              !strstr(json, "\"launches\": 0,"),
+          "json: %s", json);
+
+    /* After a reset only what runs next is listed. */
+    sluice_profile_reset(ctx);
+    CHECK_OK(ctx, sluice_kernel_launch(scale));
+    CHECK(sluice_profile_count(ctx) == 1 && sluice_profile_get(ctx, 0, &e) == SLUICE_OK &&
+              strcmp(e.name, "scale") == 0 && e.launches == 1 && e.records_in == N,
+          "after a reset: %zu entries", sluice_profile_count(ctx));
+
+    for (unsigned j = 0; j < 3; ++j)
+        sluice_stream_destroy(out[j]);
+    sluice_stream_destroy(in);
+    sluice_stream_destroy(mapped);
+    sluice_stream_destroy(scanned);
+    sluice_counters_destroy(cn);
+    sluice_kernel_destroy(idle);
+    sluice_kernel_destroy(scale);
+    sluice_kernel_destroy(split);
+    free(v);
+}
+
 static void test_profile(void)
 {
     sluice_context *ctx = check_context(1);
@@ -786,6 +908,7 @@ static void test_profile(void)
           buf);
     CHECK(sluice_profile_write_json(ctx, "/nonexistent/dir/p.json") == SLUICE_ERROR_IO,
           "unwritable json path");
+    test_profile_rows(ctx, p);
     sluice_program_destroy(p);
     sluice_context_destroy(ctx);
 }

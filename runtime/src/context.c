@@ -193,6 +193,7 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     ctx->device = ps.d;
     fill_info(ps.p, ps.d, &ctx->info);
     ctx->profile = opt.profile;
+    ctx->prof_epoch = 1;
     ctx->no_simd = opt.no_simd;
     ctx->verbose = opt.verbose;
     ctx->chunk = opt.chunk;

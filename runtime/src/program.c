@@ -320,7 +320,7 @@ void sl_set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *
 }
 
 sluice_status sl_enqueue_raw(sluice_context *ctx, cl_kernel k, const char *name, size_t global,
-                             size_t local)
+                             size_t local, const sl_raw_io *io)
 {
     if (global == 0)
         return SLUICE_OK;
@@ -334,10 +334,7 @@ sluice_status sl_enqueue_raw(sluice_context *ctx, cl_kernel k, const char *name,
         snprintf(what, sizeof what, "launching %s", name);
         return sl_cl_fail(ctx, err, what);
     }
-    if (ev) {
-        size_t entry = sl_profile_entry(ctx, name);
-        ctx->prof[entry].e.launches++;
-        sl_profile_track(ctx, entry, ev);
-    }
+    if (ev)
+        sl_profile_command(ctx, sl_profile_entry(ctx, name), ev, 1, io);
     return SLUICE_OK;
 }

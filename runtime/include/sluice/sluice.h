@@ -443,32 +443,42 @@ const sluice_pass_stats *sluice_loop_pass(const sluice_loop *loop, unsigned inde
 /* Profiling                                                           */
 /* ------------------------------------------------------------------ */
 
-/** Per-kernel totals kept when profiling is on. */
+/** Per-kernel totals kept when profiling is on. The stream algorithms'
+ *  kernels (scan_sums_u32, radix_scatter_pairs, ...) are listed too. */
 typedef struct sluice_profile_entry {
     char name[64];         /**< kernel name */
     uint64_t launches;     /**< launches queued (an ordered launch counts once) */
-    uint64_t records_in;   /**< input records processed */
+    uint64_t records_in;   /**< input records processed (of a stream algorithm's
+                                kernel: the records, chunk sums or table entries
+                                it works through) */
     uint64_t records_out;  /**< records emitted to conditional outputs */
-    uint64_t bytes;        /**< input and emitted bytes */
+    uint64_t bytes;        /**< bytes of the input records read, and of the
+                                records emitted and written to mapped outputs
+                                (a stream algorithm's kernel: what it reads and
+                                writes per record) */
     double device_seconds; /**< summed OpenCL event time */
 } sluice_profile_entry;
 
 /** Non-zero if the context profiles launches. */
 int sluice_profile_enabled(const sluice_context *ctx);
 
-/** Number of kernels with statistics (waits for queued work first). */
+/** Number of kernels with statistics: those launched since the context was
+ *  made or the profile reset (waits for queued work first). A kernel that
+ *  never ran has no entry. */
 size_t sluice_profile_count(sluice_context *ctx);
 
-/** Entry `index` (0 .. count-1), sorted by first launch. */
+/** Entry `index` (0 .. count-1), in the order of the kernels' first launch. */
 sluice_status sluice_profile_get(sluice_context *ctx, size_t index, sluice_profile_entry *entry);
 
-/** Prints the table of kernels (launches, records, bytes, time, GB/s). */
+/** Prints the table of the kernels that ran (launches, records, bytes, time,
+ *  GB/s), one line per entry, then the total time. */
 sluice_status sluice_profile_print(sluice_context *ctx, FILE *out);
 
-/** Saves the table as JSON: {"device": ..., "kernels": [{...}, ...]}. */
+/** Saves the same table as JSON: {"device": ..., "kernels": [{...}, ...]}. */
 sluice_status sluice_profile_write_json(sluice_context *ctx, const char *path);
 
-/** Forgets all statistics. */
+/** Forgets all statistics and entries: the next table lists only the kernels
+ *  launched after this call. */
 void sluice_profile_reset(sluice_context *ctx);
 
 #ifdef __cplusplus
