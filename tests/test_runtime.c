@@ -130,6 +130,16 @@ static void test_streams(sluice_context *ctx)
     sluice_stream_destroy(NULL);
 }
 
+/* Launches kernel scale (out[i] = in[i] * kf, a mapped output) over `in`. */
+static void launch_scale(sluice_context *ctx, sluice_kernel *k, sluice_stream *in,
+                         sluice_stream *out, float kf)
+{
+    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, in));
+    CHECK_OK(ctx, sluice_kernel_set_stream(k, 1, out, 1));
+    CHECK_OK(ctx, sluice_kernel_set_arg(k, 2, sizeof kf, &kf));
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+}
+
 static void test_map(sluice_context *ctx, sluice_program *p)
 {
     sluice_kernel *k = NULL;
@@ -146,11 +156,7 @@ static void test_map(sluice_context *ctx, sluice_program *p)
         CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &a));
         CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &b));
         CHECK_OK(ctx, sluice_stream_upload(a, in, n));
-        float kf = 3.0f;
-        CHECK_OK(ctx, sluice_kernel_set_input(k, 0, a));
-        CHECK_OK(ctx, sluice_kernel_set_stream(k, 1, b, 1));
-        CHECK_OK(ctx, sluice_kernel_set_arg(k, 2, sizeof kf, &kf));
-        CHECK_OK(ctx, sluice_kernel_launch(k));
+        launch_scale(ctx, k, a, b, 3.0f);
         size_t got = 99;
         CHECK_OK(ctx, sluice_stream_download(b, out, n, &got));
         CHECK(got == n, "mapped length %zu of %zu", got, n);
@@ -198,6 +204,20 @@ static int cmp_u32(const void *a, const void *b)
 }
 
 /* The split into three conditional outputs against a C reference. */
+/* Makes the three outputs of kernel split3 (capacity `cap`) and launches it
+ * over `in`, counting into `cn`. */
+static void launch_split3(sluice_context *ctx, sluice_kernel *k, sluice_stream *in, size_t cap,
+                          sluice_stream *out[3], sluice_counters *cn, sluice_output_mode mode)
+{
+    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, in));
+    for (unsigned j = 0; j < 3; ++j) {
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, cap, &out[j]));
+        CHECK_OK(ctx, sluice_kernel_set_output(k, 1 + j, j, out[j], mode));
+    }
+    CHECK_OK(ctx, sluice_kernel_set_counters(k, cn));
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+}
+
 static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pattern,
                        sluice_output_mode mode)
 {
@@ -220,16 +240,10 @@ static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pat
         ref[x % 3][rn[x % 3]++] = x;
         odd += x & 1u;
     }
-    sluice_stream *s_in, *s_out[3];
+    sluice_stream *s_in, *s_out[3] = {NULL, NULL, NULL};
     CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &s_in));
     CHECK_OK(ctx, sluice_stream_upload(s_in, in, n));
-    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, s_in));
-    for (int j = 0; j < 3; ++j) {
-        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &s_out[j]));
-        CHECK_OK(ctx, sluice_kernel_set_output(k, 1 + j, j, s_out[j], mode));
-    }
-    CHECK_OK(ctx, sluice_kernel_set_counters(k, cn));
-    CHECK_OK(ctx, sluice_kernel_launch(k));
+    launch_split3(ctx, k, s_in, n, s_out, cn, mode);
     for (int j = 0; j < 3; ++j) {
         size_t len = 0;
         CHECK_OK(ctx, sluice_stream_download(s_out[j], got, n, &len));
@@ -790,18 +804,8 @@ static void test_profile_rows(sluice_context *ctx, sluice_program *p)
     CHECK_OK(ctx, sluice_stream_create(ctx, 4, N, &scanned));
     CHECK_OK(ctx, sluice_counters_create(ctx, 2, NULL, &cn));
     CHECK_OK(ctx, sluice_stream_upload(in, v, N));
-    float kf = 2.0f;
-    CHECK_OK(ctx, sluice_kernel_set_input(scale, 0, in));
-    CHECK_OK(ctx, sluice_kernel_set_stream(scale, 1, mapped, 1));
-    CHECK_OK(ctx, sluice_kernel_set_arg(scale, 2, sizeof kf, &kf));
-    CHECK_OK(ctx, sluice_kernel_launch(scale));
-    CHECK_OK(ctx, sluice_kernel_set_input(split, 0, in));
-    for (unsigned j = 0; j < 3; ++j) {
-        CHECK_OK(ctx, sluice_stream_create(ctx, 4, N, &out[j]));
-        CHECK_OK(ctx, sluice_kernel_set_output(split, 1 + j, j, out[j], SLUICE_ORDERED));
-    }
-    CHECK_OK(ctx, sluice_kernel_set_counters(split, cn));
-    CHECK_OK(ctx, sluice_kernel_launch(split));
+    launch_scale(ctx, scale, in, mapped, 2.0f);
+    launch_split3(ctx, split, in, N, out, cn, SLUICE_ORDERED);
     /* out[0]'s length is only on the device: the scan's kernels read it there. */
     CHECK_OK(ctx, sluice_scan(ctx, out[0], scanned, SLUICE_U32, 0, NULL));
     CHECK_OK(ctx, sluice_scan(ctx, in, scanned, SLUICE_U32, 0, NULL));
