@@ -3,6 +3,7 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -175,7 +176,13 @@ static bool is_compiler_summary(const char *line, size_t len)
 }
 
 /* Standard error (file descriptor 2) sent to a temporary file while the
- * compiler runs: clang writes its summary line there itself. */
+ * compiler runs: clang writes its summary line there itself. File descriptor
+ * 2 belongs to the whole process, so captures are serialised by the
+ * library's one process-wide lock: two contexts building on two threads
+ * would otherwise each save the other's temporary file as "the real
+ * stderr" and could leave it redirected for good. */
+static pthread_mutex_t capture_lock = PTHREAD_MUTEX_INITIALIZER;
+
 typedef struct stderr_capture {
     FILE *file; /* NULL: nothing captured (stderr left alone) */
     int saved;  /* the real stderr */
@@ -185,6 +192,7 @@ static void capture_begin(stderr_capture *c)
 {
     c->file = NULL;
     c->saved = -1;
+    pthread_mutex_lock(&capture_lock);
     fflush(stderr);
     FILE *f = tmpfile();
     if (!f)
@@ -205,8 +213,10 @@ static void capture_begin(stderr_capture *c)
  * or another thread, wrote meanwhile is passed on, not lost). */
 static void capture_end(stderr_capture *c, bool everything)
 {
-    if (!c->file)
+    if (!c->file) {
+        pthread_mutex_unlock(&capture_lock);
         return;
+    }
     fflush(stderr);
     dup2(c->saved, STDERR_FILENO);
     close(c->saved);
@@ -220,6 +230,7 @@ static void capture_end(stderr_capture *c, bool everything)
     free(line);
     fclose(c->file);
     c->file = NULL;
+    pthread_mutex_unlock(&capture_lock);
 }
 
 sluice_status sluice_program_build(sluice_program *p)

@@ -266,7 +266,9 @@ void sluice_program_destroy(sluice_program *program);
  * diagnostics ("2 warnings generated.") straight to the process's stderr,
  * so while it runs, file descriptor 2 goes to a temporary file; afterwards
  * everything written there meanwhile, by any thread, is passed on to stderr
- * except that count, which is passed on too when the build failed.
+ * except that count, which is passed on too when the build failed. Builds
+ * on several threads (several contexts) take turns at that redirection,
+ * under one process-wide lock, so fresh builds do not run in parallel.
  */
 sluice_status sluice_program_build(sluice_program *program);
 
