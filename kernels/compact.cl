@@ -26,8 +26,8 @@ __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint
     SLUICE_FOR_EACH_RANGE (b, e) {
         uint i = b;
         for (; SLUICE_EMIT16_FAST && i + 16u <= e; i += 16u)
-            SLUICE_EMIT16(0, out, vload16(0, in + i),
-                          sluice_mask16(as_int16(vload16(0, flags + i) != (uint16)0u)));
+            SLUICE_EMIT16(0, out, SLUICE_LOAD16(in + i),
+                          sluice_mask16(as_int16(SLUICE_LOAD16(flags + i) != (uint16)0u)));
         for (; i < e; ++i)
             SLUICE_EMIT_IF(0, out, in[i], flags[i] != 0u);
     }
@@ -97,7 +97,7 @@ __kernel void split_w1(SLUICE_PARAMS, global const uint *in, global const uint *
     SLUICE_FOR_EACH_RANGE (lo, hi) {
         uint i = lo;
         for (; SLUICE_EMIT16_FAST && i + 16u <= hi; i += 16u) {
-            uint16 x = vload16(0, in + i), bv = vload16(0, buckets + i);
+            uint16 x = SLUICE_LOAD16(in + i), bv = SLUICE_LOAD16(buckets + i);
             SPLIT16_SLOT_(0, o0);
             SPLIT16_SLOT_(1, o1);
             SPLIT16_SLOT_(2, o2);
@@ -147,7 +147,7 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
         SLUICE_FOR_EACH_RANGE (b, e) {                                                             \
             uint i = b;                                                                            \
             for (; SLUICE_EMIT16_FAST && i + 16u <= e; i += 16u) {                                 \
-                uint16 x = vload16(0, in + i);                                                     \
+                uint16 x = SLUICE_LOAD16(in + i);                                                  \
                 ushort m = sluice_mask16(as_int16(AS16(x) < (T16)t));                              \
                 SLUICE_EMIT16(0, below, x, m);                                                     \
                 SLUICE_EMIT16(1, above, x, (ushort)~m);                                            \

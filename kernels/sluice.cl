@@ -294,23 +294,42 @@ inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
 #define SLUICE_EMIT16_FAST 0
 #endif
 
-/* The mask of the non-zero lanes of `c` (bit k for lane k), e.g. of a
- * vector comparison such as `x < (float16)t`. */
-inline ushort sluice_mask16(int16 c)
+/* No 16-wide vector crosses a call here, so the helpers below build without
+ * warnings on every x86 CPU: passing or returning one by value (a 512-bit
+ * vector) changes the calling convention when AVX-512 is missing, and clang
+ * warns at every such call, ours and the OpenCL builtins' (vload16,
+ * vstore16) alike, even in code that SLUICE_EMIT16_FAST leaves dead. So the
+ * helpers are macros that hand the vector to a function by pointer, and
+ * SLUICE_LOAD16 reads 16 words without vload16. Once inlined, the pointer is
+ * gone: the AVX-512 path compiles to the same instructions. */
+
+/* The 16 32-bit words at `p` (a global pointer to 4-byte words, aligned to 4
+ * bytes), as a uint16: vload16(0, p) without its 16-wide return value (see
+ * above). Apply as_int16 or as_float16 for other 32-bit types. */
+typedef uint16 sluice_uint16_unaligned_ __attribute__((aligned(4)));
+#define SLUICE_LOAD16(p) (*(global const sluice_uint16_unaligned_ *)(p))
+
+/* The mask of the non-zero lanes of `c` (an int16; bit k for lane k), e.g. of
+ * a vector comparison such as `x < (float16)t`. */
+#define sluice_mask16(c) sluice_mask16_((private int16[1]){(c)})
+
+inline ushort sluice_mask16_(const int16 *c)
 {
 #ifdef SLUICE_AVX512_
-    return __builtin_ia32_cmpd512_mask(c, (int16)0, 4 /* not equal */, (ushort)0xffff);
+    return __builtin_ia32_cmpd512_mask(*c, (int16)0, 4 /* not equal */, (ushort)0xffff);
 #else
-    int l[16];
-    vstore16(c, 0, l);
-    ushort m = 0;
-    for (uint k = 0; k < 16u; ++k)
-        m |= (ushort)((l[k] != 0) << k);
-    return m;
+    /* Lane k keeps bit k where it is non-zero; OR the halves together. */
+    int16 b = (*c != (int16)0) & (int16)(0x1, 0x2, 0x4, 0x8, 0x10, 0x20, 0x40, 0x80, 0x100,
+                                         0x200, 0x400, 0x800, 0x1000, 0x2000, 0x4000, 0x8000);
+    int8 h8 = b.lo | b.hi;
+    int4 h4 = h8.lo | h8.hi;
+    int2 h2 = h4.lo | h4.hi;
+    return (ushort)(h2.x | h2.y);
 #endif
 }
 
-inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, uint16 x, ushort m)
+inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const uint16 *x,
+                           ushort m)
 {
     uint k = popcount((uint)m);
     if (s->pass == 0u) {
@@ -328,17 +347,18 @@ inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, uint16
     if (p + 16u <= lim) {
         __builtin_ia32_storedqusi512_mask(
             (int *)(size_t)(buf + p),
-            __builtin_ia32_compresssi512_mask(as_int16(x), as_int16(x), m), (ushort)0xffff);
+            __builtin_ia32_compresssi512_mask(as_int16(*x), as_int16(*x), m), (ushort)0xffff);
         return;
     }
     if (p + k <= lim) {
-        __builtin_ia32_compressstoresi512_mask((int16 *)(size_t)(buf + p), as_int16(x), m);
+        __builtin_ia32_compressstoresi512_mask((int16 *)(size_t)(buf + p), as_int16(*x), m);
         return;
     }
 #endif
-    /* Near an overflowing output's capacity, or without AVX-512. */
-    uint v[16];
-    vstore16(x, 0, v);
+    /* Near an overflowing output's capacity, or without AVX-512. The copy
+     * keeps the lane-by-lane reads off the caller's vector. */
+    uint16 lanes = *x;
+    const uint *v = (const uint *)&lanes;
     for (uint l = 0; l < 16u; ++l) {
         if ((m >> l) & 1u) {
             if (p < lim)
@@ -351,7 +371,8 @@ inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, uint16
 /* Emits the lanes of `x` (a uint16; use as_uint16 for other 32-bit types)
  * whose bit is set in `mask` (a ushort) to conditional output `slot`, whose
  * records are 32-bit words in `buf`, in lane order. */
-#define SLUICE_EMIT16(slot, buf, x, mask) sluice_emit16_(&sluice_s_, (slot), (buf), (x), (mask))
+#define SLUICE_EMIT16(slot, buf, x, mask)                                                          \
+    sluice_emit16_(&sluice_s_, (slot), (buf), (private uint16[1]){(x)}, (mask))
 
 /* Adds `amount` (a uint) to counter `i` of the bound counter set. Aggregated
  * per work-item chunk: one global atomic per chunk and counter. */

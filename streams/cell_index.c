@@ -37,6 +37,7 @@ sluice_status sluice_cell_index_search(sluice_context *ctx, sluice_stream *sorte
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     size_t n = 0;
     sluice_status st = prepare(ctx, "sluice_cell_index_search", sorted_keys, cell_count, start, &n);
     if (st != SLUICE_OK)
@@ -49,7 +50,7 @@ sluice_status sluice_cell_index_search(sluice_context *ctx, sluice_stream *sorte
                          SIZES(sizeof(cl_mem), sizeof nn, sizeof cells, sizeof(cl_mem)),
                          VALUES(&sorted_keys->mem, &nn, &cells, &start->mem));
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k, "cell_search", cells, 0);
+        st = sl_enqueue_raw(ctx, k, "cell_search", cells, 0, SL_RAW_IO(cells, 4));
     if (k)
         clReleaseKernel(k);
     if (st == SLUICE_OK)
@@ -62,6 +63,7 @@ sluice_status sluice_cell_index_count(sluice_context *ctx, sluice_stream *keys, 
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     size_t n = 0;
     sluice_status st = prepare(ctx, "sluice_cell_index_count", keys, cell_count, start, &n);
     if (st != SLUICE_OK)
@@ -102,24 +104,24 @@ sluice_status sluice_cell_index_count(sluice_context *ctx, sluice_stream *keys, 
                          SIZES(sizeof(cl_mem), sizeof nn, sizeof cells, sizeof(cl_mem)),
                          VALUES(&keys->mem, &nn, &cells, &start->mem));
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k_hist, "cell_hist", nn, 0);
+        st = sl_enqueue_raw(ctx, k_hist, "cell_hist", nn, 0, SL_RAW_IO(nn, 4));
     if (st == SLUICE_OK)
         st = sl_set_args(ctx, k_sums, "cell_scan_sums", 4,
                          SIZES(sizeof(cl_mem), sizeof len, sizeof blocks, sizeof(cl_mem)),
                          VALUES(&start->mem, &len, &blocks, &sums));
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k_sums, "cell_scan_sums", blocks, 1);
+        st = sl_enqueue_raw(ctx, k_sums, "cell_scan_sums", blocks, 1, SL_RAW_IO(len, 4));
     if (st == SLUICE_OK)
         st = sl_set_args(ctx, k_offsets, "cell_scan_offsets", 2,
                          SIZES(sizeof(cl_mem), sizeof blocks), VALUES(&sums, &blocks));
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k_offsets, "cell_scan_offsets", 1, 1);
+        st = sl_enqueue_raw(ctx, k_offsets, "cell_scan_offsets", 1, 1, SL_RAW_IO(blocks, 8));
     if (st == SLUICE_OK)
         st = sl_set_args(ctx, k_apply, "cell_scan_apply", 4,
                          SIZES(sizeof(cl_mem), sizeof len, sizeof blocks, sizeof(cl_mem)),
                          VALUES(&start->mem, &len, &blocks, &sums));
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k_apply, "cell_scan_apply", blocks, 1);
+        st = sl_enqueue_raw(ctx, k_apply, "cell_scan_apply", blocks, 1, SL_RAW_IO(len, 8));
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(start, len);
 

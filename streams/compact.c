@@ -157,6 +157,7 @@ sluice_status sluice_compact(sluice_context *ctx, sluice_stream *in, sluice_stre
     static const char fn[] = "sluice_compact";
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     sluice_status st = check_in(ctx, fn, in);
     if (st == SLUICE_OK && !flags)
         st = sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "%s: NULL flags stream", fn);
@@ -201,6 +202,7 @@ sluice_status sluice_split(sluice_context *ctx, sluice_stream *in, sluice_stream
     static const char fn[] = "sluice_split";
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     sluice_status st = check_in(ctx, fn, in);
     if (st == SLUICE_OK && !buckets)
         st = sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "%s: NULL buckets stream", fn);
@@ -263,6 +265,7 @@ sluice_status sluice_partition(sluice_context *ctx, sluice_stream *in, sluice_sc
     static const char fn[] = "sluice_partition";
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     sluice_status st = check_in(ctx, fn, in);
     if (st == SLUICE_OK && in->record_size != 4)
         st = sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,

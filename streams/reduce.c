@@ -39,6 +39,7 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     if (!in || !result)
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "sluice_reduce: NULL %s",
                        !in ? "input stream" : "result");
@@ -108,10 +109,11 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
         if (err != CL_SUCCESS)
             st = sl_cl_fail(ctx, err, "sluice_reduce: setting kernel arguments");
     }
+    const sl_raw_io io_part = {n_fixed, in_var, limit, 4}; /* for the profile */
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, part, part_name, global, REDUCE_LOCAL);
+        st = sl_enqueue_raw(ctx, part, part_name, global, REDUCE_LOCAL, &io_part);
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, final, final_name, 1, 1);
+        st = sl_enqueue_raw(ctx, final, final_name, 1, 1, SL_RAW_IO(global, 4));
     if (st == SLUICE_OK)
         st = sl_read_flagged(ctx, parts, global, result, in, "sluice_reduce", "result");
     if (parts)

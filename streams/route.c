@@ -13,6 +13,7 @@ sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, slu
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_route_bounded", "keys", NULL);
     if (st == SLUICE_OK)
         st = sl_check_u32_stream(ctx, values, "sluice_route_bounded", "values", NULL);
@@ -73,14 +74,16 @@ sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, slu
                              VALUES(&keys->mem, &values->mem, &nn, &bucket_count, &slots,
                                     &fill->mem, &out->mem));
         if (st == SLUICE_OK)
-            st = sl_enqueue_raw(ctx, k_scatter, "route_scatter", nn, 0);
+            st = sl_enqueue_raw(ctx, k_scatter, "route_scatter", nn, 0,
+                                SL_RAW_IO(nn, 12)); /* key and value read, value written */
         if (st == SLUICE_OK)
             st = sl_set_args(
                 ctx, k_finish, "route_finish", 4,
                 SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof bucket_count, sizeof slots),
                 VALUES(&fill->mem, &overflow->mem, &bucket_count, &slots));
         if (st == SLUICE_OK)
-            st = sl_enqueue_raw(ctx, k_finish, "route_finish", bucket_count, 0);
+            st = sl_enqueue_raw(ctx, k_finish, "route_finish", bucket_count, 0,
+                                SL_RAW_IO(bucket_count, 8));
     }
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(out, total);

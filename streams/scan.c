@@ -53,6 +53,7 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     if (!in || !out)
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "sluice_scan: NULL %s stream",
                        !in ? "input" : "output");
@@ -145,17 +146,21 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
         if (err != CL_SUCCESS)
             st = sl_cl_fail(ctx, err, "sluice_scan: setting kernel arguments");
     }
+    /* For the profile: pass 1 reads the records, pass 2 reads and writes the
+     * chunk sums, pass 3 reads and writes the records. */
+    const sl_raw_io io_sums = {si.n_fixed, si.in_var, si.limit, 4};
+    const sl_raw_io io_apply = {si.n_fixed, si.in_var, si.limit, 8};
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k[0], names[0], si.global, SCAN_LOCAL);
+        st = sl_enqueue_raw(ctx, k[0], names[0], si.global, SCAN_LOCAL, &io_sums);
     if (st == SLUICE_OK) {
-        st = sl_enqueue_raw(ctx, k[1], names[1], 1, 1);
+        st = sl_enqueue_raw(ctx, k[1], names[1], 1, 1, SL_RAW_IO(si.global, 8));
         /* Pass 2 writes the output's length on the device. */
         out->len_known = si.n_fixed != SL_NONE;
         out->len = si.n_fixed != SL_NONE ? si.n_fixed : 0;
         sl_stream_written(out, SL_WRITER_ALGORITHM, 0, "sluice_scan");
     }
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k[2], names[2], si.global, SCAN_LOCAL);
+        st = sl_enqueue_raw(ctx, k[2], names[2], si.global, SCAN_LOCAL, &io_apply);
     if (st == SLUICE_OK && total)
         st = sl_read_flagged(ctx, sums, si.global, total, in, "sluice_scan", "total");
     if (sums)

@@ -12,9 +12,10 @@
 /* Largest work-group used for the local-memory stages (2x as many keys). */
 #define BITONIC_MAX_LOCAL 256u
 
-/* Queues bitonic_local over the blocks of 2w positions that hold records. */
+/* Queues bitonic_local over the blocks of 2w positions that hold records;
+ * `io` is what it reads and writes, for the profile. */
 static sluice_status run_local(sluice_context *ctx, cl_kernel k, cl_uint n, cl_uint w, cl_uint k_lo,
-                               cl_uint k_hi)
+                               cl_uint k_hi, const sl_raw_io *io)
 {
     cl_int err = clSetKernelArg(k, 4, sizeof k_lo, &k_lo);
     if (err == CL_SUCCESS)
@@ -22,13 +23,14 @@ static sluice_status run_local(sluice_context *ctx, cl_kernel k, cl_uint n, cl_u
     if (err != CL_SUCCESS)
         return sl_cl_fail(ctx, err, "setting the merge sizes of bitonic_local");
     size_t blocks = ((size_t)n + 2u * w - 1u) / (2u * w);
-    return sl_enqueue_raw(ctx, k, "bitonic_local", blocks * w, w);
+    return sl_enqueue_raw(ctx, k, "bitonic_local", blocks * w, w, io);
 }
 
 sluice_status sluice_sort_bitonic(sluice_context *ctx, sluice_stream *keys, sluice_stream *values)
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     size_t n = 0, nv = 0;
     sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_sort_bitonic", "keys", &n);
     if (st != SLUICE_OK)
@@ -87,9 +89,11 @@ sluice_status sluice_sort_bitonic(sluice_context *ctx, sluice_stream *keys, slui
         if (err != CL_SUCCESS)
             st = sl_cl_fail(ctx, err, "setting the local memory of bitonic_local");
     }
+    /* Every launch reads and writes each record: its key, and its value. */
+    const sl_raw_io *io = SL_RAW_IO(nn, values ? 16 : 8);
     /* Sort every block of 2w positions in local memory. */
     if (st == SLUICE_OK)
-        st = run_local(ctx, k_local, nn, w, 2u, 2u * w);
+        st = run_local(ctx, k_local, nn, w, 2u, 2u * w, io);
     /* Then each larger merge: its strides >= 2w in global memory, one launch
      * per step, and the rest in local memory. */
     for (cl_uint k = 4u * w; st == SLUICE_OK && k != 0 && k <= P; k <<= 1) {
@@ -97,11 +101,11 @@ sluice_status sluice_sort_bitonic(sluice_context *ctx, sluice_stream *keys, slui
             cl_int err = clSetKernelArg(k_step, 4, sizeof k, &k);
             if (err == CL_SUCCESS)
                 err = clSetKernelArg(k_step, 5, sizeof j, &j);
-            st = err == CL_SUCCESS ? sl_enqueue_raw(ctx, k_step, "bitonic_step", P / 2, 0)
+            st = err == CL_SUCCESS ? sl_enqueue_raw(ctx, k_step, "bitonic_step", P / 2, 0, io)
                                    : sl_cl_fail(ctx, err, "setting the step of bitonic_step");
         }
         if (st == SLUICE_OK)
-            st = run_local(ctx, k_local, nn, w, k, k);
+            st = run_local(ctx, k_local, nn, w, k, k, io);
     }
 
 done:

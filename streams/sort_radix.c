@@ -27,6 +27,7 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     size_t n = 0, nv = 0;
     sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_sort_radix", "keys", &n);
     if (st != SLUICE_OK)
@@ -93,7 +94,7 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
                      SIZES(sizeof(cl_mem), sizeof nn, sizeof chunks, sizeof(cl_mem)),
                      VALUES(&keys->mem, &nn, &chunks, &table));
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k_all, "radix_hist_all", chunks, 1);
+        st = sl_enqueue_raw(ctx, k_all, "radix_hist_all", chunks, 1, SL_RAW_IO(nn, 4));
     if (st != SLUICE_OK)
         goto done;
     err = clEnqueueReadBuffer(ctx->queue, table, CL_TRUE, 0,
@@ -126,7 +127,7 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
                                    sizeof(cl_mem), sizeof offset),
                              VALUES(&cur_k, &nn, &chunks, &shift, &table, &offset));
             if (st == SLUICE_OK)
-                st = sl_enqueue_raw(ctx, k_hist, "radix_hist", chunks, 1);
+                st = sl_enqueue_raw(ctx, k_hist, "radix_hist", chunks, 1, SL_RAW_IO(nn, 4));
         }
         first = 0;
         if (st == SLUICE_OK)
@@ -134,7 +135,7 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
                              SIZES(sizeof(cl_mem), sizeof offset, sizeof table_len),
                              VALUES(&table, &offset, &table_len));
         if (st == SLUICE_OK)
-            st = sl_enqueue_raw(ctx, k_scan, "radix_scan", 1, 1);
+            st = sl_enqueue_raw(ctx, k_scan, "radix_scan", 1, 1, SL_RAW_IO(table_len, 8));
         if (st == SLUICE_OK && values)
             st = sl_set_args(
                 ctx, k_scatter, "radix_scatter_pairs", 9,
@@ -148,7 +149,8 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
                              VALUES(&cur_k, &alt_k, &nn, &chunks, &shift, &table, &offset));
         if (st == SLUICE_OK)
             st = sl_enqueue_raw(ctx, k_scatter,
-                                values ? "radix_scatter_pairs" : "radix_scatter_keys", chunks, 1);
+                                values ? "radix_scatter_pairs" : "radix_scatter_keys", chunks, 1,
+                                SL_RAW_IO(nn, values ? 16 : 8)); /* read and written */
         if (st != SLUICE_OK)
             goto done;
         cl_mem t_k = cur_k, t_v = cur_v;

@@ -2,6 +2,7 @@
  * outputs (ordered and unordered), counters, loops, profiling and errors,
  * against plain C references. */
 #include "check.h"
+#include "sluice/streams.h"
 
 #include <math.h>
 #include <string.h>
@@ -46,7 +47,7 @@ static const char *kernels_src =
     "    SLUICE_FOR_EACH_RANGE(b, e) {\n"
     "        uint i = b;\n"
     "        for (; i + 16u <= e; i += 16u) {\n"
-    "            uint16 x = vload16(0, in + i);\n"
+    "            uint16 x = SLUICE_LOAD16(in + i);\n"
     "            SLUICE_EMIT16(0, out, x, sluice_mask16(as_int16(x < (uint16)100u)));\n"
     "        }\n"
     "        for (; i < e; ++i)\n"
@@ -129,6 +130,16 @@ static void test_streams(sluice_context *ctx)
     sluice_stream_destroy(NULL);
 }
 
+/* Launches kernel scale (out[i] = in[i] * kf, a mapped output) over `in`. */
+static void launch_scale(sluice_context *ctx, sluice_kernel *k, sluice_stream *in,
+                         sluice_stream *out, float kf)
+{
+    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, in));
+    CHECK_OK(ctx, sluice_kernel_set_stream(k, 1, out, 1));
+    CHECK_OK(ctx, sluice_kernel_set_arg(k, 2, sizeof kf, &kf));
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+}
+
 static void test_map(sluice_context *ctx, sluice_program *p)
 {
     sluice_kernel *k = NULL;
@@ -145,11 +156,7 @@ static void test_map(sluice_context *ctx, sluice_program *p)
         CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &a));
         CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &b));
         CHECK_OK(ctx, sluice_stream_upload(a, in, n));
-        float kf = 3.0f;
-        CHECK_OK(ctx, sluice_kernel_set_input(k, 0, a));
-        CHECK_OK(ctx, sluice_kernel_set_stream(k, 1, b, 1));
-        CHECK_OK(ctx, sluice_kernel_set_arg(k, 2, sizeof kf, &kf));
-        CHECK_OK(ctx, sluice_kernel_launch(k));
+        launch_scale(ctx, k, a, b, 3.0f);
         size_t got = 99;
         CHECK_OK(ctx, sluice_stream_download(b, out, n, &got));
         CHECK(got == n, "mapped length %zu of %zu", got, n);
@@ -197,6 +204,20 @@ static int cmp_u32(const void *a, const void *b)
 }
 
 /* The split into three conditional outputs against a C reference. */
+/* Makes the three outputs of kernel split3 (capacity `cap`) and launches it
+ * over `in`, counting into `cn`. */
+static void launch_split3(sluice_context *ctx, sluice_kernel *k, sluice_stream *in, size_t cap,
+                          sluice_stream *out[3], sluice_counters *cn, sluice_output_mode mode)
+{
+    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, in));
+    for (unsigned j = 0; j < 3; ++j) {
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, cap, &out[j]));
+        CHECK_OK(ctx, sluice_kernel_set_output(k, 1 + j, j, out[j], mode));
+    }
+    CHECK_OK(ctx, sluice_kernel_set_counters(k, cn));
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+}
+
 static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pattern,
                        sluice_output_mode mode)
 {
@@ -219,16 +240,10 @@ static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pat
         ref[x % 3][rn[x % 3]++] = x;
         odd += x & 1u;
     }
-    sluice_stream *s_in, *s_out[3];
+    sluice_stream *s_in, *s_out[3] = {NULL, NULL, NULL};
     CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &s_in));
     CHECK_OK(ctx, sluice_stream_upload(s_in, in, n));
-    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, s_in));
-    for (int j = 0; j < 3; ++j) {
-        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &s_out[j]));
-        CHECK_OK(ctx, sluice_kernel_set_output(k, 1 + j, j, s_out[j], mode));
-    }
-    CHECK_OK(ctx, sluice_kernel_set_counters(k, cn));
-    CHECK_OK(ctx, sluice_kernel_launch(k));
+    launch_split3(ctx, k, s_in, n, s_out, cn, mode);
     for (int j = 0; j < 3; ++j) {
         size_t len = 0;
         CHECK_OK(ctx, sluice_stream_download(s_out[j], got, n, &len));
@@ -756,6 +771,117 @@ static void test_errors(sluice_context *ctx)
           "status string");
 }
 
+/* Finds the profile entry called `name`; 0 when there is none. */
+static int profile_find(sluice_context *ctx, const char *name, sluice_profile_entry *e)
+{
+    size_t count = sluice_profile_count(ctx);
+    for (size_t i = 0; i < count; ++i)
+        if (sluice_profile_get(ctx, i, e) == SLUICE_OK && strcmp(e->name, name) == 0)
+            return 1;
+    return 0;
+}
+
+/* The profile lists the kernels that ran, and only those, in the order of
+ * their first launch; counts the records of a stream algorithm's kernels,
+ * also when the input's length is only on the device; and counts mapped
+ * outputs in the bytes. */
+static void test_profile_rows(sluice_context *ctx, sluice_program *p)
+{
+    sluice_profile_reset(ctx);
+    CHECK(sluice_profile_count(ctx) == 0, "no entry after a reset");
+    sluice_kernel *idle = NULL, *scale = NULL, *split = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "dup", &idle)); /* made, never launched */
+    CHECK_OK(ctx, sluice_kernel_create(p, "scale", &scale));
+    CHECK_OK(ctx, sluice_kernel_create(p, "split3", &split));
+    enum { N = 3000, THIRDS = 1000 }; /* the multiples of 3 below N */
+    uint32_t *v = malloc(N * sizeof *v);
+    for (uint32_t i = 0; i < N; ++i)
+        v[i] = i;
+    sluice_stream *in = NULL, *mapped = NULL, *out[3] = {NULL, NULL, NULL}, *scanned = NULL;
+    sluice_counters *cn = NULL;
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, N, &in));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, N, &mapped));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, N, &scanned));
+    CHECK_OK(ctx, sluice_counters_create(ctx, 2, NULL, &cn));
+    CHECK_OK(ctx, sluice_stream_upload(in, v, N));
+    launch_scale(ctx, scale, in, mapped, 2.0f);
+    launch_split3(ctx, split, in, N, out, cn, SLUICE_ORDERED);
+    /* out[0]'s length is only on the device: the scan's kernels read it there. */
+    CHECK_OK(ctx, sluice_scan(ctx, out[0], scanned, SLUICE_U32, 0, NULL));
+    CHECK_OK(ctx, sluice_scan(ctx, in, scanned, SLUICE_U32, 0, NULL));
+
+    size_t count = sluice_profile_count(ctx);
+    sluice_profile_entry e;
+    CHECK(count == 6,
+          "6 kernels ran (scale, split3, sluice_scan_chunk_counts, 3 scan passes), "
+          "the profile has %zu entries",
+          count);
+    for (size_t i = 0; i < count; ++i) {
+        CHECK_OK(ctx, sluice_profile_get(ctx, i, &e));
+        CHECK(e.launches > 0 && strcmp(e.name, "dup") != 0, "entry %zu: %s, %llu launches", i,
+              e.name, (unsigned long long)e.launches);
+    }
+    CHECK(sluice_profile_get(ctx, 0, &e) == SLUICE_OK && strcmp(e.name, "scale") == 0,
+          "entries in the order of the first launch: %s first", e.name);
+    CHECK(profile_find(ctx, "scale", &e) && e.records_in == N && e.bytes == 8u * N,
+          "scale: %llu records in, %llu bytes (input and mapped output: %d)",
+          (unsigned long long)e.records_in, (unsigned long long)e.bytes, 8 * N);
+    CHECK(profile_find(ctx, "split3", &e) && e.records_in == N && e.records_out == N &&
+              e.bytes == 8u * N,
+          "split3: %llu in, %llu out, %llu bytes", (unsigned long long)e.records_in,
+          (unsigned long long)e.records_out, (unsigned long long)e.bytes);
+    CHECK(profile_find(ctx, "scan_sums_u32", &e) && e.launches == 2 && e.records_in == THIRDS + N &&
+              e.bytes == 4u * (THIRDS + N),
+          "scan_sums_u32: %llu launches, %llu records in (want %d), %llu bytes",
+          (unsigned long long)e.launches, (unsigned long long)e.records_in, THIRDS + N,
+          (unsigned long long)e.bytes);
+    CHECK(profile_find(ctx, "scan_apply_u32", &e) && e.records_in == THIRDS + N &&
+              e.bytes == 8u * (THIRDS + N),
+          "scan_apply_u32: %llu records in, %llu bytes", (unsigned long long)e.records_in,
+          (unsigned long long)e.bytes);
+    CHECK(profile_find(ctx, "scan_chunks_u32", &e) && e.records_in > 0,
+          "scan_chunks_u32: %llu records in", (unsigned long long)e.records_in);
+    CHECK(profile_find(ctx, "sluice_scan_chunk_counts", &e) && e.records_in > 0,
+          "sluice_scan_chunk_counts: %llu records in", (unsigned long long)e.records_in);
+
+    /* The printed table and the JSON have the same rows. */
+    FILE *f = tmpfile();
+    char table[8192] = {0};
+    CHECK_OK(ctx, sluice_profile_print(ctx, f));
+    rewind(f);
+    table[fread(table, 1, sizeof table - 1, f)] = 0;
+    fclose(f);
+    CHECK(strstr(table, "scan_sums_u32") && !strstr(table, "dup"), "table:\n%s", table);
+    CHECK_OK(ctx, sluice_profile_write_json(ctx, "test_runtime_profile_rows.json"));
+    char json[8192] = {0};
+    f = fopen("test_runtime_profile_rows.json", "r");
+    if (f) {
+        json[fread(json, 1, sizeof json - 1, f)] = 0;
+        fclose(f);
+    }
+    CHECK(strstr(json, "\"scan_apply_u32\"") && !strstr(json, "\"dup\"") &&
+              !strstr(json, "\"launches\": 0,"),
+          "json: %s", json);
+
+    /* After a reset only what runs next is listed. */
+    sluice_profile_reset(ctx);
+    CHECK_OK(ctx, sluice_kernel_launch(scale));
+    CHECK(sluice_profile_count(ctx) == 1 && sluice_profile_get(ctx, 0, &e) == SLUICE_OK &&
+              strcmp(e.name, "scale") == 0 && e.launches == 1 && e.records_in == N,
+          "after a reset: %zu entries", sluice_profile_count(ctx));
+
+    for (unsigned j = 0; j < 3; ++j)
+        sluice_stream_destroy(out[j]);
+    sluice_stream_destroy(in);
+    sluice_stream_destroy(mapped);
+    sluice_stream_destroy(scanned);
+    sluice_counters_destroy(cn);
+    sluice_kernel_destroy(idle);
+    sluice_kernel_destroy(scale);
+    sluice_kernel_destroy(split);
+    free(v);
+}
+
 static void test_profile(void)
 {
     sluice_context *ctx = check_context(1);
@@ -786,6 +912,7 @@ static void test_profile(void)
           buf);
     CHECK(sluice_profile_write_json(ctx, "/nonexistent/dir/p.json") == SLUICE_ERROR_IO,
           "unwritable json path");
+    test_profile_rows(ctx, p);
     sluice_program_destroy(p);
     sluice_context_destroy(ctx);
 }

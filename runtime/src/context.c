@@ -127,6 +127,13 @@ static int pick_visit(void *user, cl_platform_id p, cl_device_id d)
     return 1;
 }
 
+/* Is the environment variable `name` set to something other than "" or "0"? */
+static int env_on(const char *name)
+{
+    const char *v = getenv(name);
+    return v && *v && strcmp(v, "0") != 0;
+}
+
 static void set_msg(char *error, size_t size, const char *msg)
 {
     if (error && size) {
@@ -151,12 +158,12 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
         if (env && *env)
             opt.device = env;
     }
-    const char *prof_env = getenv("SLUICE_PROFILE");
-    if (prof_env && *prof_env && strcmp(prof_env, "0") != 0)
+    if (env_on("SLUICE_PROFILE"))
         opt.profile = 1;
-    const char *simd_env = getenv("SLUICE_NO_SIMD");
-    if (simd_env && *simd_env && strcmp(simd_env, "0") != 0)
+    if (env_on("SLUICE_NO_SIMD"))
         opt.no_simd = 1;
+    if (env_on("SLUICE_VERBOSE"))
+        opt.verbose = 1;
 
     pick_state ps = {opt.device, 1, NULL, NULL, 0};
     sluice_status st = for_each_device(pick_visit, &ps);
@@ -186,7 +193,9 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     ctx->device = ps.d;
     fill_info(ps.p, ps.d, &ctx->info);
     ctx->profile = opt.profile;
+    ctx->prof_epoch = 1;
     ctx->no_simd = opt.no_simd;
+    ctx->verbose = opt.verbose;
     ctx->chunk = opt.chunk;
     cl_int err;
     cl_context_properties props[] = {CL_CONTEXT_PLATFORM, (cl_context_properties)ps.p, 0};
@@ -268,6 +277,7 @@ sluice_status sluice_context_device(const sluice_context *ctx, sluice_device_inf
 
 sluice_status sluice_context_finish(sluice_context *ctx)
 {
+    sl_clear_error(ctx);
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     cl_int err = clFinish(ctx->queue);

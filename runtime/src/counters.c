@@ -7,6 +7,7 @@
 sluice_status sluice_counters_create(sluice_context *ctx, size_t count, const char *const *names,
                                      sluice_counters **out)
 {
+    sl_clear_error(ctx);
     if (out)
         *out = NULL;
     if (!ctx || !out)
@@ -75,6 +76,7 @@ sluice_status sluice_counters_reset(sluice_counters *c)
 {
     if (!c)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(c->ctx);
     return sl_vars_fill(c->ctx, c->var, c->count + 1, 0);
 }
 
@@ -94,6 +96,7 @@ sluice_status sluice_counters_read(sluice_counters *c, uint32_t *values)
 {
     if (!c || !values)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(c->ctx);
     cl_uint v[SLUICE_MAX_COUNTERS + 1];
     sluice_status st = sl_vars_read(c->ctx, c->var, c->count + 1, v);
     if (st == SLUICE_OK)

@@ -51,7 +51,19 @@ typedef struct sl_profile_slot {
     sluice_profile_entry e;
     size_t out_record_size[SLUICE_MAX_OUTPUTS];
     size_t in_record_size;
+    size_t mapped_record_size; /* all mapped outputs': each gets a record per input */
 } sl_profile_slot;
+
+/* No profile entry (out of host memory). */
+#define SL_NO_ENTRY ((size_t)-1)
+
+/* The records of a raw launch whose count is a device-side length, read in
+ * queue order and added to its profile entry when the profile is settled. */
+typedef struct sl_pending_records {
+    size_t entry;
+    cl_uint value, cap; /* past cap: an overflowed input, nothing read */
+    size_t record_bytes;
+} sl_pending_records;
 
 struct sluice_context {
     cl_platform_id platform;
@@ -72,11 +84,15 @@ struct sluice_context {
     cl_kernel scan_kernel;
     /* Profiling. */
     int profile;
-    int no_simd; /* programs are built with -DSLUICE_NO_SIMD */
-    sl_profile_slot *prof;
+    int no_simd;           /* programs are built with -DSLUICE_NO_SIMD */
+    int verbose;           /* builds print their compiler log on stderr */
+    sl_profile_slot *prof; /* entries by first launch since the last reset */
     size_t prof_count, prof_cap;
+    unsigned prof_epoch; /* counts the resets, from 1 */
     sl_pending_event *pending;
     size_t pending_count, pending_cap;
+    sl_pending_records *pending_records; /* fixed capacity: reads land in it */
+    size_t pending_records_count;
     struct sluice_kernel *kernels; /* live kernels (for profile counts) */
     struct sluice_stream *streams; /* live streams (to name where an overflow began) */
     cl_kernel map_length_kernel;   /* sets mapped outputs' lengths on the device */
@@ -139,10 +155,20 @@ struct sluice_kernel {
     unsigned out_arg[SLUICE_MAX_OUTPUTS];
     sluice_output_mode out_mode[SLUICE_MAX_OUTPUTS];
     sluice_counters *counters;
-    cl_uint prof_var; /* 1 + SLUICE_MAX_OUTPUTS vars when profiling */
-    size_t prof_entry;
+    cl_uint prof_var;    /* 1 + SLUICE_MAX_OUTPUTS vars when profiling */
+    size_t prof_entry;   /* valid while prof_epoch is the context's */
+    unsigned prof_epoch; /* 0: not launched since the last reset */
     struct sluice_kernel *next_live;
 };
+
+/* Empties the context's error message (ctx may be NULL). Every public
+ * function that can fail with a message does this first, so that the
+ * message is the last call's: "" after a call that succeeded. */
+static inline void sl_clear_error(sluice_context *ctx)
+{
+    if (ctx)
+        ctx->error[0] = 0;
+}
 
 /* Sets the context's error message and returns `status`. */
 sluice_status sl_fail(sluice_context *ctx, sluice_status status, const char *fmt, ...)
@@ -208,14 +234,34 @@ sluice_status sl_embedded_cl_kernel(sluice_context *ctx, const char *program, co
  * the first error in `*err`. */
 void sl_set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *err);
 
+/* What a raw launch works through, for the profile: `n` records (the input
+ * records, chunk sums or table entries it reads), or, when n is SL_NONE, as
+ * many as the device-side length in variable `var` says (none when it is
+ * past `cap`: an overflowed input is not read); `record_bytes` read and
+ * written per record. */
+typedef struct sl_raw_io {
+    cl_uint n, var, cap;
+    size_t record_bytes;
+} sl_raw_io;
+
+/* A sl_raw_io of `n` records known on the host. */
+#define SL_RAW_IO(n, record_bytes) (&(const sl_raw_io){(cl_uint)(n), SL_NONE, 0, (record_bytes)})
+
 /* Queues a raw 1-D NDRange (global rounded up to a multiple of local when
- * local is non-zero), recording a profile event under `name` when profiling. */
+ * local is non-zero). When profiling, counts a launch of `name` with its
+ * event time and the records of `io` (may be NULL: none). */
 sluice_status sl_enqueue_raw(sluice_context *ctx, cl_kernel k, const char *name, size_t global,
-                             size_t local);
+                             size_t local, const sl_raw_io *io);
 
 /* Profiling helpers (profile.c). */
+/* The entry named `name`, made if it is new (SL_NO_ENTRY out of memory). */
 size_t sl_profile_entry(sluice_context *ctx, const char *name);
-void sl_profile_track(sluice_context *ctx, size_t entry, cl_event ev);
+/* Kernel k's entry, made at its first launch since the last reset. */
+size_t sl_profile_kernel_entry(sluice_kernel *k);
+/* Counts a command queued with event `ev` (taken) into `entry`: its time, a
+ * launch when `launch`, and the records of `io` (may be NULL). */
+void sl_profile_command(sluice_context *ctx, size_t entry, cl_event ev, int launch,
+                        const sl_raw_io *io);
 sluice_status sl_profile_sync(sluice_context *ctx);
 void sl_profile_free(sluice_context *ctx);
 

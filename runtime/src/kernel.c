@@ -12,6 +12,7 @@
 
 sluice_status sluice_kernel_create(sluice_program *program, const char *name, sluice_kernel **out)
 {
+    sl_clear_error(program ? program->ctx : NULL);
     if (out)
         *out = NULL;
     if (!program || !name || !out)
@@ -58,7 +59,6 @@ sluice_status sluice_kernel_create(sluice_program *program, const char *name, sl
             sluice_kernel_destroy(kn);
             return st;
         }
-        kn->prof_entry = sl_profile_entry(ctx, name);
     }
     kn->next_live = ctx->kernels;
     ctx->kernels = kn;
@@ -133,6 +133,7 @@ sluice_status sluice_kernel_set_input(sluice_kernel *k, unsigned arg, sluice_str
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     if (k->input) /* one input stream per kernel (Purcell 3.1.1) */
         k->input = NULL;
     sluice_status st = bind_stream(k, arg, stream);
@@ -148,6 +149,7 @@ sluice_status sluice_kernel_set_output(sluice_kernel *k, unsigned arg, unsigned 
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     if (slot >= SLUICE_MAX_OUTPUTS)
         return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                        "kernel %s: output slot %u is out of range (0..%u)", k->name, slot,
@@ -171,6 +173,7 @@ sluice_status sluice_kernel_set_stream(sluice_kernel *k, unsigned arg, sluice_st
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     sluice_status st = bind_stream(k, arg, stream);
     if (st == SLUICE_OK)
         k->arg_map[arg] = map_output ? 1 : 0;
@@ -181,6 +184,7 @@ sluice_status sluice_kernel_set_arg(sluice_kernel *k, unsigned arg, size_t size,
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     sluice_status st = check_arg(k, arg);
     if (st != SLUICE_OK)
         return st;
@@ -202,6 +206,7 @@ sluice_status sluice_kernel_set_counters(sluice_kernel *k, sluice_counters *coun
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     if (counters && counters->ctx != k->ctx)
         return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                        "kernel %s: counters belong to another context", k->name);
@@ -228,18 +233,21 @@ static size_t choose_chunk(const sluice_context *ctx, size_t bound)
     return want < lo ? lo : want > hi ? hi : want;
 }
 
-static sluice_status enqueue(sluice_kernel *k, size_t global, cl_event *ev)
+/* Queues one command of a launch; the profile counts the launch at its
+ * first command (an ordered launch is two). */
+static sluice_status enqueue(sluice_kernel *k, size_t global, int first)
 {
     size_t local = SL_LOCAL_SIZE;
+    cl_event ev = NULL;
     cl_int err = clEnqueueNDRangeKernel(k->ctx->queue, k->cl, 1, NULL, &global, &local, 0, NULL,
-                                        k->ctx->profile ? ev : NULL);
+                                        k->ctx->profile ? &ev : NULL);
     if (err != CL_SUCCESS) {
         char what[128];
         snprintf(what, sizeof what, "launching kernel %s", k->name);
         return sl_cl_fail(k->ctx, err, what);
     }
-    if (k->ctx->profile && *ev)
-        sl_profile_track(k->ctx, k->prof_entry, *ev);
+    if (ev)
+        sl_profile_command(k->ctx, sl_profile_kernel_entry(k), ev, first, NULL);
     return SLUICE_OK;
 }
 
@@ -275,7 +283,7 @@ static sluice_status map_length(sluice_context *ctx, cl_uint src, cl_uint cap, c
             st = sl_cl_fail(ctx, err, "setting the arguments of sluice_map_length");
     }
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, mk, "sluice_map_length", 1, 1);
+        st = sl_enqueue_raw(ctx, mk, "sluice_map_length", 1, 1, NULL);
     return st;
 }
 
@@ -283,6 +291,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 {
     if (!k)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
     sluice_context *ctx = k->ctx;
     if (!has_count && !k->input)
         return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
@@ -376,7 +385,6 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
     }
 
     sluice_status st = SLUICE_OK;
-    cl_event ev = NULL;
     if (queued) {
         if (L.ordered_mask) {
             size_t rows = 0; /* rows up to the highest ordered slot */
@@ -391,7 +399,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
             L.first_pass = 0;
             st = set_hidden(k, &L);
             if (st == SLUICE_OK)
-                st = enqueue(k, global, &ev);
+                st = enqueue(k, global, 1);
             if (st == SLUICE_OK && !ctx->scan_kernel)
                 st = sl_embedded_cl_kernel(ctx, "runtime.cl", "sluice_scan_chunk_counts",
                                            &ctx->scan_kernel);
@@ -404,7 +412,8 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
                 clSetKernelArg(ctx->scan_kernel, 2, sizeof offset, &offset);
                 clSetKernelArg(ctx->scan_kernel, 3, sizeof var, &var);
                 clSetKernelArg(ctx->scan_kernel, 4, sizeof n, &n);
-                st = sl_enqueue_raw(ctx, ctx->scan_kernel, "sluice_scan_chunk_counts", 1, 1);
+                st = sl_enqueue_raw(ctx, ctx->scan_kernel, "sluice_scan_chunk_counts", 1, 1,
+                                    SL_RAW_IO(n, 8)); /* each count read and written */
             }
             L.mode = 2;
             L.first_pass = any_unordered ? 0 : 1;
@@ -415,11 +424,9 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         if (st == SLUICE_OK)
             st = set_hidden(k, &L);
         if (st == SLUICE_OK)
-            st = enqueue(k, global, &ev);
+            st = enqueue(k, global, L.mode != 2);
         if (st != SLUICE_OK)
             return st;
-        if (ctx->profile)
-            ctx->prof[k->prof_entry].e.launches++;
     }
 
     /* Lengths: conditional outputs are now known only on the device; mapped
@@ -444,11 +451,16 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         m->len_known = false;
         sl_stream_written(m, SL_WRITER_MAPPED, a, k->name);
     }
-    if (ctx->profile && st == SLUICE_OK) {
+    if (ctx->profile && st == SLUICE_OK && queued && k->prof_epoch == ctx->prof_epoch) {
+        /* What the device counts is turned into bytes with these. */
         sl_profile_slot *slot = &ctx->prof[k->prof_entry];
         slot->in_record_size = k->input ? k->input->record_size : 0;
         for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
             slot->out_record_size[s] = k->out[s] ? k->out[s]->record_size : 0;
+        slot->mapped_record_size = 0;
+        for (unsigned a = 0; a < k->n_args; ++a)
+            if (k->arg_map[a])
+                slot->mapped_record_size += k->arg_stream[a]->record_size;
     }
     return st;
 }

@@ -30,6 +30,7 @@ static double now_seconds(void)
 sluice_status sluice_loop_create(sluice_context *ctx, const sluice_loop_desc *desc,
                                  sluice_loop **out)
 {
+    sl_clear_error(ctx);
     if (out)
         *out = NULL;
     if (!ctx || !desc || !out || !desc->pass)
@@ -164,6 +165,7 @@ sluice_status sluice_loop_run(sluice_loop *l)
 {
     if (!l)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(l->ctx);
     sluice_context *ctx = l->ctx;
     l->pass_count = 0;
     sluice_status st = name_pass(ctx, read_values(l), "loop, before pass", 0);

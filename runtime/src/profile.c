@@ -10,6 +10,10 @@ int sluice_profile_enabled(const sluice_context *ctx)
     return ctx ? ctx->profile : 0;
 }
 
+/* Most raw launches whose record count, read from the device, waits to be
+ * added up (a fixed array: the reads land in it). */
+#define SL_PENDING_RECORDS 256
+
 size_t sl_profile_entry(sluice_context *ctx, const char *name)
 {
     for (size_t i = 0; i < ctx->prof_count; ++i)
@@ -19,7 +23,7 @@ size_t sl_profile_entry(sluice_context *ctx, const char *name)
         size_t cap = ctx->prof_cap ? ctx->prof_cap * 2 : 16;
         sl_profile_slot *p = realloc(ctx->prof, cap * sizeof *p);
         if (!p)
-            return 0; /* keeps counting into entry 0 rather than failing a launch */
+            return SL_NO_ENTRY; /* the launch goes uncounted rather than failing */
         ctx->prof = p;
         ctx->prof_cap = cap;
     }
@@ -27,6 +31,63 @@ size_t sl_profile_entry(sluice_context *ctx, const char *name)
     memset(s, 0, sizeof *s);
     snprintf(s->e.name, sizeof s->e.name, "%s", name);
     return ctx->prof_count++;
+}
+
+size_t sl_profile_kernel_entry(sluice_kernel *k)
+{
+    sluice_context *ctx = k->ctx;
+    if (k->prof_epoch != ctx->prof_epoch) {
+        size_t entry = sl_profile_entry(ctx, k->name);
+        if (entry == SL_NO_ENTRY)
+            return entry;
+        k->prof_entry = entry;
+        k->prof_epoch = ctx->prof_epoch;
+    }
+    return k->prof_entry;
+}
+
+/* Adds the pending device-side record counts to their entries; the queue
+ * must have finished. */
+static void add_pending_records(sluice_context *ctx)
+{
+    for (size_t i = 0; i < ctx->pending_records_count; ++i) {
+        const sl_pending_records *r = &ctx->pending_records[i];
+        cl_uint n = r->value <= r->cap ? r->value : 0u;
+        ctx->prof[r->entry].e.records_in += n;
+        ctx->prof[r->entry].e.bytes += (uint64_t)n * r->record_bytes;
+    }
+    ctx->pending_records_count = 0;
+}
+
+static void add_records(sluice_context *ctx, size_t entry, const sl_raw_io *io)
+{
+    if (!io)
+        return;
+    sl_profile_slot *s = &ctx->prof[entry];
+    if (io->n != SL_NONE) {
+        s->e.records_in += io->n;
+        s->e.bytes += (uint64_t)io->n * io->record_bytes;
+        return;
+    }
+    /* The length as the launch reads it: a read queued behind it. */
+    if (!ctx->pending_records) {
+        ctx->pending_records = malloc(SL_PENDING_RECORDS * sizeof *ctx->pending_records);
+        if (!ctx->pending_records)
+            return; /* uncounted rather than failing the launch */
+    }
+    if (ctx->pending_records_count == SL_PENDING_RECORDS) {
+        if (clFinish(ctx->queue) != CL_SUCCESS)
+            return;
+        add_pending_records(ctx);
+    }
+    sl_pending_records *r = &ctx->pending_records[ctx->pending_records_count];
+    r->entry = entry;
+    r->value = 0;
+    r->cap = io->cap;
+    r->record_bytes = io->record_bytes;
+    if (clEnqueueReadBuffer(ctx->queue, ctx->vars, CL_FALSE, io->var * sizeof(cl_uint),
+                            sizeof(cl_uint), &r->value, 0, NULL, NULL) == CL_SUCCESS)
+        ctx->pending_records_count++;
 }
 
 static void resolve_events(sluice_context *ctx)
@@ -46,7 +107,8 @@ static void resolve_events(sluice_context *ctx)
     ctx->pending_count = 0;
 }
 
-void sl_profile_track(sluice_context *ctx, size_t entry, cl_event ev)
+/* Keeps `ev` to add its time to `entry` when the profile is settled. */
+static void track_event(sluice_context *ctx, size_t entry, cl_event ev)
 {
     if (ctx->pending_count == ctx->pending_cap) {
         size_t cap = ctx->pending_cap ? ctx->pending_cap * 2 : 256;
@@ -67,6 +129,19 @@ void sl_profile_track(sluice_context *ctx, size_t entry, cl_event ev)
     }
 }
 
+void sl_profile_command(sluice_context *ctx, size_t entry, cl_event ev, int launch,
+                        const sl_raw_io *io)
+{
+    if (entry == SL_NO_ENTRY) {
+        clReleaseEvent(ev);
+        return;
+    }
+    if (launch)
+        ctx->prof[entry].e.launches++;
+    track_event(ctx, entry, ev);
+    add_records(ctx, entry, io);
+}
+
 sluice_status sl_profile_sync(sluice_context *ctx)
 {
     if (!ctx->profile)
@@ -75,16 +150,17 @@ sluice_status sl_profile_sync(sluice_context *ctx)
     if (err != CL_SUCCESS)
         return sl_cl_fail(ctx, err, "clFinish");
     resolve_events(ctx);
+    add_pending_records(ctx);
     for (sluice_kernel *k = ctx->kernels; k; k = k->next_live) {
-        if (k->prof_var == SL_NONE)
-            continue;
+        if (k->prof_var == SL_NONE || k->prof_epoch != ctx->prof_epoch)
+            continue; /* not launched since the last reset: nothing counted */
         cl_uint v[1 + SLUICE_MAX_OUTPUTS];
         sluice_status st = sl_vars_read(ctx, k->prof_var, 1 + SLUICE_MAX_OUTPUTS, v);
         if (st != SLUICE_OK)
             return st;
         sl_profile_slot *s = &ctx->prof[k->prof_entry];
         s->e.records_in += v[0];
-        s->e.bytes += (uint64_t)v[0] * s->in_record_size;
+        s->e.bytes += (uint64_t)v[0] * (s->in_record_size + s->mapped_record_size);
         for (unsigned o = 0; o < SLUICE_MAX_OUTPUTS; ++o) {
             s->e.records_out += v[1 + o];
             s->e.bytes += (uint64_t)v[1 + o] * s->out_record_size[o];
@@ -101,9 +177,12 @@ void sl_profile_free(sluice_context *ctx)
     resolve_events(ctx);
     free(ctx->pending);
     free(ctx->prof);
+    free(ctx->pending_records); /* the queue has finished: no read is landing */
     ctx->pending = NULL;
     ctx->prof = NULL;
+    ctx->pending_records = NULL;
     ctx->pending_count = ctx->pending_cap = ctx->prof_count = ctx->prof_cap = 0;
+    ctx->pending_records_count = 0;
 }
 
 size_t sluice_profile_count(sluice_context *ctx)
@@ -118,6 +197,7 @@ sluice_status sluice_profile_get(sluice_context *ctx, size_t index, sluice_profi
 {
     if (!ctx || !entry)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     sluice_status st = sl_profile_sync(ctx);
     if (st != SLUICE_OK)
         return st;
@@ -132,6 +212,7 @@ sluice_status sluice_profile_print(sluice_context *ctx, FILE *out)
 {
     if (!ctx || !out)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     if (!ctx->profile) {
         fprintf(out, "profiling is off (set SLUICE_PROFILE=1 or the profile option)\n");
         return SLUICE_OK;
@@ -174,6 +255,7 @@ sluice_status sluice_profile_write_json(sluice_context *ctx, const char *path)
 {
     if (!ctx || !path)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(ctx);
     sluice_status st = sl_profile_sync(ctx);
     if (st != SLUICE_OK)
         return st;
@@ -204,12 +286,8 @@ void sluice_profile_reset(sluice_context *ctx)
 {
     if (!ctx)
         return;
-    sl_profile_sync(ctx);
-    for (size_t i = 0; i < ctx->prof_count; ++i) {
-        sl_profile_slot *s = &ctx->prof[i];
-        char name[64];
-        memcpy(name, s->e.name, sizeof name);
-        memset(&s->e, 0, sizeof s->e);
-        memcpy(s->e.name, name, sizeof name);
-    }
+    sl_profile_sync(ctx); /* folds in what the device counted, and zeroes it */
+    ctx->prof_count = 0;
+    ctx->pending_records_count = 0;
+    ctx->prof_epoch++; /* every kernel makes its entry again at its next launch */
 }

@@ -1,9 +1,12 @@
 /* Programs: OpenCL C source built lazily, once. */
 #include "internal.h"
 
+#include <ctype.h>
 #include <errno.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 const char *sl_embedded_find(const char *name)
 {
@@ -33,18 +36,20 @@ static int is_sluice_include(const char *line, size_t len)
                                strncmp(line + i, "<sluice.cl>", 11) == 0);
 }
 
-/* The text handed to the compiler: the embedded sluice.cl, a #line directive
- * so that messages name the user's file and line, then the user's source with
- * its include lines of sluice.cl blanked (line numbers stay right). */
+/* The text handed to the compiler: the embedded sluice.cl, then the user's
+ * source with its include lines of sluice.cl blanked (line numbers stay
+ * right). A #line directive before each names its file, so that messages say
+ * sluice.cl:LINE or the user's file:LINE. */
 static char *compose_source(const char *name, const char *source)
 {
     const char *header = sl_embedded_find("sluice.cl");
     size_t hl = header ? strlen(header) : 0, sl = strlen(source), nl = strlen(name);
-    char *out = malloc(hl + sl + nl + 64);
+    char *out = malloc(hl + sl + nl + 96);
     if (!out)
         return NULL;
     char *p = out;
     if (header) {
+        p += sprintf(p, "#line 1 \"sluice.cl\"\n");
         memcpy(p, header, hl);
         p += hl;
     }
@@ -72,6 +77,7 @@ sluice_status sluice_program_create_source(sluice_context *ctx, const char *name
                                            const char *source, const char *options,
                                            sluice_program **out)
 {
+    sl_clear_error(ctx);
     if (out)
         *out = NULL;
     if (!ctx || !source || !out)
@@ -98,6 +104,7 @@ sluice_status sluice_program_create_source(sluice_context *ctx, const char *name
 sluice_status sluice_program_create_file(sluice_context *ctx, const char *path, const char *options,
                                          sluice_program **out)
 {
+    sl_clear_error(ctx);
     if (out)
         *out = NULL;
     if (!ctx || !path || !out)
@@ -155,10 +162,82 @@ void sluice_program_destroy(sluice_program *p)
     free(p);
 }
 
+/* Is this the line clang prints on stderr after compiling a source with
+ * diagnostics ("2 warnings generated.", "1 warning and 1 error generated.")?
+ * PoCL sends the diagnostics themselves to the build log, not this count. */
+static bool is_compiler_summary(const char *line, size_t len)
+{
+    static const char tail[] = " generated.";
+    const size_t tl = sizeof tail - 1;
+    while (len && (line[len - 1] == '\n' || line[len - 1] == '\r'))
+        --len;
+    return len > tl && isdigit((unsigned char)line[0]) && memcmp(line + len - tl, tail, tl) == 0 &&
+           (strstr(line, " warning") != NULL || strstr(line, " error") != NULL);
+}
+
+/* Standard error (file descriptor 2) sent to a temporary file while the
+ * compiler runs: clang writes its summary line there itself. File descriptor
+ * 2 belongs to the whole process, so captures are serialised by the
+ * library's one process-wide lock: two contexts building on two threads
+ * would otherwise each save the other's temporary file as "the real
+ * stderr" and could leave it redirected for good. */
+static pthread_mutex_t capture_lock = PTHREAD_MUTEX_INITIALIZER;
+
+typedef struct stderr_capture {
+    FILE *file; /* NULL: nothing captured (stderr left alone) */
+    int saved;  /* the real stderr */
+} stderr_capture;
+
+static void capture_begin(stderr_capture *c)
+{
+    c->file = NULL;
+    c->saved = -1;
+    pthread_mutex_lock(&capture_lock);
+    fflush(stderr);
+    FILE *f = tmpfile();
+    if (!f)
+        return; /* no temporary file: the compiler's chatter gets through */
+    int saved = dup(STDERR_FILENO);
+    if (saved >= 0 && dup2(fileno(f), STDERR_FILENO) >= 0) {
+        c->file = f;
+        c->saved = saved;
+        return;
+    }
+    if (saved >= 0)
+        close(saved);
+    fclose(f);
+}
+
+/* Restores stderr and writes to it what was captured: all of it when
+ * `everything`, else all but the compiler's summary lines (what other code,
+ * or another thread, wrote meanwhile is passed on, not lost). */
+static void capture_end(stderr_capture *c, bool everything)
+{
+    if (!c->file) {
+        pthread_mutex_unlock(&capture_lock);
+        return;
+    }
+    fflush(stderr);
+    dup2(c->saved, STDERR_FILENO);
+    close(c->saved);
+    rewind(c->file);
+    char *line = NULL;
+    size_t cap = 0;
+    ssize_t len;
+    while ((len = getline(&line, &cap, c->file)) > 0)
+        if (everything || !is_compiler_summary(line, (size_t)len))
+            fwrite(line, 1, (size_t)len, stderr);
+    free(line);
+    fclose(c->file);
+    c->file = NULL;
+    pthread_mutex_unlock(&capture_lock);
+}
+
 sluice_status sluice_program_build(sluice_program *p)
 {
     if (!p)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(p->ctx);
     if (p->cl)
         return SLUICE_OK;
     sluice_context *ctx = p->ctx;
@@ -174,7 +253,10 @@ sluice_status sluice_program_build(sluice_program *p)
         return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
     }
     snprintf(opts, ol, "-cl-std=CL1.2%s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "", p->options);
+    stderr_capture capture;
+    capture_begin(&capture);
     err = clBuildProgram(prog, 1, &ctx->device, opts, NULL, NULL);
+    capture_end(&capture, err != CL_SUCCESS || ctx->verbose);
     free(opts);
     size_t log_size = 0;
     clGetProgramBuildInfo(prog, ctx->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &log_size);
@@ -185,6 +267,11 @@ sluice_status sluice_program_build(sluice_program *p)
         log[log_size] = 0;
         free(p->log);
         p->log = log;
+    }
+    if (ctx->verbose && p->log && p->log[0]) {
+        size_t n = strlen(p->log);
+        fprintf(stderr, "sluice: build log of %s:\n%s%s", p->name, p->log,
+                p->log[n - 1] == '\n' ? "" : "\n");
     }
     if (err != CL_SUCCESS) {
         clReleaseProgram(prog);
@@ -244,7 +331,7 @@ void sl_set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *
 }
 
 sluice_status sl_enqueue_raw(sluice_context *ctx, cl_kernel k, const char *name, size_t global,
-                             size_t local)
+                             size_t local, const sl_raw_io *io)
 {
     if (global == 0)
         return SLUICE_OK;
@@ -258,10 +345,7 @@ sluice_status sl_enqueue_raw(sluice_context *ctx, cl_kernel k, const char *name,
         snprintf(what, sizeof what, "launching %s", name);
         return sl_cl_fail(ctx, err, what);
     }
-    if (ev) {
-        size_t entry = sl_profile_entry(ctx, name);
-        ctx->prof[entry].e.launches++;
-        sl_profile_track(ctx, entry, ev);
-    }
+    if (ev)
+        sl_profile_command(ctx, sl_profile_entry(ctx, name), ev, 1, io);
     return SLUICE_OK;
 }

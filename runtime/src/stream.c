@@ -31,6 +31,7 @@ static sluice_status alloc_records(sluice_context *ctx, size_t record_size, size
 sluice_status sluice_stream_create(sluice_context *ctx, size_t record_size, size_t capacity,
                                    sluice_stream **out)
 {
+    sl_clear_error(ctx);
     if (out)
         *out = NULL;
     if (!ctx || !out || record_size == 0)
@@ -203,6 +204,7 @@ sluice_status sluice_stream_length(sluice_stream *s, size_t *length)
 {
     if (!s || !length)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(s->ctx);
     sluice_status st = sl_stream_length(s, "");
     if (st == SLUICE_OK || st == SLUICE_ERROR_OVERFLOW)
         *length = s->len == SL_LEN_VOID ? 0 : s->len;
@@ -213,6 +215,7 @@ sluice_status sluice_stream_set_length(sluice_stream *s, size_t length)
 {
     if (!s)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(s->ctx);
     if (length > s->capacity)
         return sl_fail(s->ctx, SLUICE_ERROR_OVERFLOW,
                        "length %zu exceeds the stream's capacity of %zu records", length,
@@ -232,6 +235,7 @@ sluice_status sluice_stream_clear(sluice_stream *s)
 
 sluice_status sluice_stream_upload(sluice_stream *s, const void *records, size_t count)
 {
+    sl_clear_error(s ? s->ctx : NULL);
     if (!s || (count && !records))
         return s ? sl_fail(s->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                            "sluice_stream_upload: NULL records")
@@ -252,6 +256,7 @@ sluice_status sluice_stream_download(sluice_stream *s, void *records, size_t max
 {
     if (!s || (max && !records))
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(s->ctx);
     /* An overflowed stream still gives the records it holds (none when void). */
     sluice_status st = sl_stream_length(s, "");
     if (st != SLUICE_OK && st != SLUICE_ERROR_OVERFLOW)
@@ -274,6 +279,7 @@ sluice_status sluice_stream_grow(sluice_stream *s, size_t capacity)
 {
     if (!s)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(s->ctx);
     if (capacity <= s->capacity)
         return SLUICE_OK;
     cl_mem m;
@@ -304,6 +310,7 @@ sluice_status sluice_stream_swap(sluice_stream *a, sluice_stream *b)
 {
     if (!a || !b || a->ctx != b->ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(a->ctx);
     if (a->record_size != b->record_size)
         return sl_fail(a->ctx, SLUICE_ERROR_INVALID_ARGUMENT,
                        "cannot swap streams with records of %zu and %zu bytes", a->record_size,

@@ -45,7 +45,8 @@
  *
  * Conventions
  *   Every function that can fail returns a sluice_status; SLUICE_OK is 0.
- *   On failure the context keeps a readable message: sluice_context_error().
+ *   On failure the context keeps a readable message, sluice_context_error(),
+ *   until the next call (which empties it first).
  *   Nothing in the library aborts or exits. Handles are opaque and come in
  *   create/destroy pairs; destroy functions accept NULL. Objects are not
  *   thread-safe: use one context per thread, or lock around it.
@@ -118,6 +119,11 @@ typedef struct sluice_context_options {
      *  use only portable OpenCL C and no device-specific fast paths (see
      *  SLUICE_EMIT16 in sluice.cl). Also enabled by SLUICE_NO_SIMD=1. */
     int no_simd;
+    /** Non-zero: every program build prints its compiler log (warnings
+     *  included) and the compiler's own output on stderr. Otherwise a build
+     *  that succeeds prints nothing: its warnings stay in
+     *  sluice_program_build_log(). Also enabled by SLUICE_VERBOSE=1. */
+    int verbose;
 } sluice_context_options;
 
 typedef struct sluice_context sluice_context;
@@ -134,7 +140,10 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
  *  kernel, counter set and loop made from it must be destroyed first. */
 void sluice_context_destroy(sluice_context *ctx);
 
-/** The message of the last error seen by this context ("" when none). */
+/** The message of the last call that failed, and only until the next call:
+ *  every function that can fail with a message empties it when it starts,
+ *  so after a call that succeeded it is "". Read it right after the failing
+ *  call (like errno, but cleared on success). */
 const char *sluice_context_error(const sluice_context *ctx);
 
 /** Describes the context's device. */
@@ -246,12 +255,26 @@ sluice_status sluice_program_create_file(sluice_context *ctx, const char *path, 
 /** Frees the program. Kernels made from it must be destroyed first. */
 void sluice_program_destroy(sluice_program *program);
 
-/** Compiles now if not yet compiled. A compile error returns
- *  SLUICE_ERROR_BUILD; the compiler's log (with file and line) is then in
- *  sluice_program_build_log() and the context's error message. */
+/**
+ * Compiles now if not yet compiled. A compile error returns
+ * SLUICE_ERROR_BUILD; the compiler's log (with file and line) is then in
+ * sluice_program_build_log() and the context's error message.
+ *
+ * A build that succeeds prints nothing, warnings or not: they are in the
+ * build log. (With the verbose option or SLUICE_VERBOSE=1 the log is printed
+ * on stderr after every build.) PoCL's compiler writes a count of its
+ * diagnostics ("2 warnings generated.") straight to the process's stderr,
+ * so while it runs, file descriptor 2 goes to a temporary file; afterwards
+ * everything written there meanwhile, by any thread, is passed on to stderr
+ * except that count, which is passed on too when the build failed. Builds
+ * on several threads (several contexts) take turns at that redirection,
+ * under one process-wide lock, so fresh builds do not run in parallel.
+ */
 sluice_status sluice_program_build(sluice_program *program);
 
-/** The compiler log of the last build ("" before a build). */
+/** The compiler log of the last build, warnings and errors with file and
+ *  line ("" before a build, or when the compiler had nothing to say). Kept
+ *  until the program is destroyed. */
 const char *sluice_program_build_log(const sluice_program *program);
 
 /* ------------------------------------------------------------------ */
@@ -422,32 +445,42 @@ const sluice_pass_stats *sluice_loop_pass(const sluice_loop *loop, unsigned inde
 /* Profiling                                                           */
 /* ------------------------------------------------------------------ */
 
-/** Per-kernel totals kept when profiling is on. */
+/** Per-kernel totals kept when profiling is on. The stream algorithms'
+ *  kernels (scan_sums_u32, radix_scatter_pairs, ...) are listed too. */
 typedef struct sluice_profile_entry {
     char name[64];         /**< kernel name */
     uint64_t launches;     /**< launches queued (an ordered launch counts once) */
-    uint64_t records_in;   /**< input records processed */
+    uint64_t records_in;   /**< input records processed (of a stream algorithm's
+                                kernel: the records, chunk sums or table entries
+                                it works through) */
     uint64_t records_out;  /**< records emitted to conditional outputs */
-    uint64_t bytes;        /**< input and emitted bytes */
+    uint64_t bytes;        /**< bytes of the input records read, and of the
+                                records emitted and written to mapped outputs
+                                (a stream algorithm's kernel: what it reads and
+                                writes per record) */
     double device_seconds; /**< summed OpenCL event time */
 } sluice_profile_entry;
 
 /** Non-zero if the context profiles launches. */
 int sluice_profile_enabled(const sluice_context *ctx);
 
-/** Number of kernels with statistics (waits for queued work first). */
+/** Number of kernels with statistics: those launched since the context was
+ *  made or the profile reset (waits for queued work first). A kernel that
+ *  never ran has no entry. */
 size_t sluice_profile_count(sluice_context *ctx);
 
-/** Entry `index` (0 .. count-1), sorted by first launch. */
+/** Entry `index` (0 .. count-1), in the order of the kernels' first launch. */
 sluice_status sluice_profile_get(sluice_context *ctx, size_t index, sluice_profile_entry *entry);
 
-/** Prints the table of kernels (launches, records, bytes, time, GB/s). */
+/** Prints the table of the kernels that ran (launches, records, bytes, time,
+ *  GB/s), one line per entry, then the total time. */
 sluice_status sluice_profile_print(sluice_context *ctx, FILE *out);
 
-/** Saves the table as JSON: {"device": ..., "kernels": [{...}, ...]}. */
+/** Saves the same table as JSON: {"device": ..., "kernels": [{...}, ...]}. */
 sluice_status sluice_profile_write_json(sluice_context *ctx, const char *path);
 
-/** Forgets all statistics. */
+/** Forgets all statistics and entries: the next table lists only the kernels
+ *  launched after this call. */
 void sluice_profile_reset(sluice_context *ctx);
 
 #ifdef __cplusplus
