@@ -917,11 +917,52 @@ static void test_profile(void)
     sluice_context_destroy(ctx);
 }
 
+/* sluice_stream_fill against C: record sizes that OpenCL's fill takes (4,
+ * 128) and others (1, 12, 40, 200), counts around the doubling copies,
+ * zero records, the length set; too many records and a NULL record are
+ * errors that leave the stream as it was. */
+static void test_fill(sluice_context *ctx)
+{
+    const size_t sizes[] = {1, 4, 12, 40, 128, 200};
+    const size_t counts[] = {0, 1, 2, 3, 1000, 100003};
+    for (size_t a = 0; a < sizeof sizes / sizeof *sizes; ++a) {
+        size_t rs = sizes[a], cap = 100003;
+        unsigned char rec[200], *got = malloc(cap * rs);
+        for (size_t i = 0; i < rs; ++i)
+            rec[i] = (unsigned char)(7 * i + rs + 1);
+        sluice_stream *s = NULL;
+        CHECK_OK(ctx, sluice_stream_create(ctx, rs, cap, &s));
+        for (size_t c = 0; s && got && c < sizeof counts / sizeof *counts; ++c) {
+            size_t n = counts[c], len = 99, bad = 0;
+            CHECK_OK(ctx, sluice_stream_fill(s, rec, n));
+            CHECK_OK(ctx, sluice_stream_length(s, &len));
+            CHECK_OK(ctx, sluice_stream_download(s, got, cap, NULL));
+            for (size_t i = 0; i < n; ++i)
+                bad += memcmp(got + i * rs, rec, rs) != 0;
+            CHECK(len == n && bad == 0, "fill %zu-byte records x %zu: length %zu, %zu wrong", rs, n,
+                  len, bad);
+        }
+        if (s) {
+            size_t len = 0;
+            CHECK(sluice_stream_fill(s, rec, cap + 1) == SLUICE_ERROR_OVERFLOW &&
+                      strstr(sluice_context_error(ctx), "capacity"),
+                  "fill past capacity: %s", sluice_context_error(ctx));
+            CHECK(sluice_stream_fill(s, NULL, 1) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL record");
+            CHECK_OK(ctx, sluice_stream_length(s, &len));
+            CHECK(len == cap, "a failed fill changed the length to %zu", len);
+        }
+        sluice_stream_destroy(s);
+        free(got);
+    }
+    CHECK(sluice_stream_fill(NULL, "x", 1) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL stream");
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
     sluice_program *p = program(ctx);
     test_streams(ctx);
+    test_fill(ctx);
     test_map(ctx, p);
     const size_t sizes[] = {0, 1, 7, 1023, 1025, 65535, 65537, 1u << 20};
     for (size_t i = 0; i < sizeof sizes / sizeof *sizes; ++i)

@@ -252,6 +252,37 @@ sluice_status sluice_stream_upload(sluice_stream *s, const void *records, size_t
     return sluice_stream_set_length(s, count);
 }
 
+sluice_status sluice_stream_fill(sluice_stream *s, const void *record, size_t count)
+{
+    sl_clear_error(s ? s->ctx : NULL);
+    if (!s || !record)
+        return s ? sl_fail(s->ctx, SLUICE_ERROR_INVALID_ARGUMENT, "sluice_stream_fill: NULL record")
+                 : SLUICE_ERROR_INVALID_ARGUMENT;
+    if (count > s->capacity)
+        return sl_fail(s->ctx, SLUICE_ERROR_OVERFLOW,
+                       "filling %zu records into a stream of capacity %zu", count, s->capacity);
+    size_t rs = s->record_size;
+    cl_command_queue q = s->ctx->queue;
+    cl_int err = CL_SUCCESS;
+    if (count && rs <= 128 && (rs & (rs - 1)) == 0) {
+        /* OpenCL's fill takes patterns of 1, 2, 4, ... 128 bytes */
+        err = clEnqueueFillBuffer(q, s->mem, record, rs, 0, count * rs, 0, NULL, NULL);
+    } else if (count) {
+        /* any other record size: one record written, then copied onto the
+         * next records in doubling blocks (log2(count) copies, no host
+         * buffer of the stream's size) */
+        err = clEnqueueWriteBuffer(q, s->mem, CL_TRUE, 0, rs, record, 0, NULL, NULL);
+        for (size_t done = 1; err == CL_SUCCESS && done < count;) {
+            size_t n = count - done < done ? count - done : done;
+            err = clEnqueueCopyBuffer(q, s->mem, s->mem, 0, done * rs, n * rs, 0, NULL, NULL);
+            done += n;
+        }
+    }
+    if (err != CL_SUCCESS)
+        return sl_cl_fail(s->ctx, err, "filling a stream");
+    return sluice_stream_set_length(s, count);
+}
+
 sluice_status sluice_stream_download(sluice_stream *s, void *records, size_t max, size_t *count)
 {
     if (!s || (max && !records))

@@ -206,6 +206,12 @@ sluice_status sluice_stream_clear(sluice_stream *stream);
  *  length to `count`. Fails with SLUICE_ERROR_OVERFLOW if count > capacity. */
 sluice_status sluice_stream_upload(sluice_stream *stream, const void *records, size_t count);
 
+/** Queues setting the first `count` records to copies of `record` (record
+ *  size bytes, e.g. zeros) and the length to `count`, without a host buffer
+ *  of the stream's size. `record` may be reused when the call returns.
+ *  Fails with SLUICE_ERROR_OVERFLOW if count > capacity. */
+sluice_status sluice_stream_fill(sluice_stream *stream, const void *record, size_t count);
+
 /** Copies the stream's records (at most `max` of them) to host memory and
  *  writes their number to `*count` (may be NULL). Blocks until done. Returns
  *  SLUICE_ERROR_OVERFLOW, as sluice_stream_length does, if the stream
