@@ -319,8 +319,8 @@ inline ushort sluice_mask16_(const int16 *c)
     return __builtin_ia32_cmpd512_mask(*c, (int16)0, 4 /* not equal */, (ushort)0xffff);
 #else
     /* Lane k keeps bit k where it is non-zero; OR the halves together. */
-    int16 b = (*c != (int16)0) & (int16)(0x1, 0x2, 0x4, 0x8, 0x10, 0x20, 0x40, 0x80, 0x100,
-                                         0x200, 0x400, 0x800, 0x1000, 0x2000, 0x4000, 0x8000);
+    int16 b = (*c != (int16)0) & (int16)(0x1, 0x2, 0x4, 0x8, 0x10, 0x20, 0x40, 0x80, 0x100, 0x200,
+                                         0x400, 0x800, 0x1000, 0x2000, 0x4000, 0x8000);
     int8 h8 = b.lo | b.hi;
     int4 h4 = h8.lo | h8.hi;
     int2 h2 = h4.lo | h4.hi;
@@ -328,8 +328,7 @@ inline ushort sluice_mask16_(const int16 *c)
 #endif
 }
 
-inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const uint16 *x,
-                           ushort m)
+inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const uint16 *x, ushort m)
 {
     uint k = popcount((uint)m);
     if (s->pass == 0u) {

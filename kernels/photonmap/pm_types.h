@@ -58,14 +58,14 @@ typedef struct pm_knn_result {
 
 /** The search's description as the kernels take it (by value). */
 typedef struct pm_knn_params {
-    rt_u32 k;             /* photons sought */
-    float max_r2;         /* squared maximum radius */
-    rt_u32 normal_filter; /* non-zero: only photons with dot(n, d) < 0 */
-    rt_u32 index_cap;     /* places per query in the index list (0: none) */
+    rt_u32 k;               /* photons sought */
+    float max_r2;           /* squared maximum radius */
+    rt_u32 normal_filter;   /* non-zero: only photons with dot(n, d) < 0 */
+    rt_u32 index_cap;       /* places per query in the index list (0: none) */
     rt_u32 shells_per_pass; /* shells holding photons a pass explores (0: all) */
-    float margin[3];      /* per axis: how much the shell distances are shrunk
-                             so that rounding in the cell function never makes
-                             a shell look farther than a photon in it */
+    float margin[3];        /* per axis: how much the shell distances are shrunk
+                               so that rounding in the cell function never makes
+                               a shell look farther than a photon in it */
 } pm_knn_params;
 
 /** rt_ray.flags of a photon ray whose path so far went only through
