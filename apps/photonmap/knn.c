@@ -2,7 +2,11 @@
  * kernels/photonmap/pm_knn.cl. Per batch of queries:
  *
  *   pm_knn_gather  (once per call) the photons copied in cell order, power
- *                  redistribution applied, so a cell is one contiguous run
+ *                  redistribution applied, so a cell is one contiguous run;
+ *                  planes of x, y, z, ... (structure of arrays), which the
+ *                  search reads in blocks of PM_MAP_BLOCK
+ *   pm_knn_bounds  (once per call) the photons' bounding box, a lower bound
+ *                  on every distance beside the shells'
  *   pm_knn_sat_*   (once per call) the summed-count table over the cells,
  *                  with which a pass jumps over shells without photons
  *   pm_knn_init    results zeroed, live = the batch's ids
@@ -50,11 +54,12 @@ enum {
 struct pm_knn {
     sluice_context *ctx;
     sluice_program *prog;
-    sluice_kernel *k_gather, *k_sat[3], *k_init, *k_pass, *k_live;
+    sluice_kernel *k_gather, *k_bounds, *k_sat[3], *k_init, *k_pass, *k_live;
     sluice_loop *loop;
     /* scratch kept between calls; streams only grow */
     sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
     sluice_stream *map, *map_start; /* the cell-ordered copy of the photons */
+    sluice_stream *box;             /* its bounding box: lo xyz, hi xyz */
     sluice_stream *sat;             /* summed counts: skips shells without photons */
     /* the current call's pass hook */
     pm_knn_pass_fn on_pass;
@@ -106,6 +111,7 @@ void pm_knn_destroy(pm_knn *knn)
         return;
     sluice_loop_destroy(knn->loop);
     sluice_kernel_destroy(knn->k_gather);
+    sluice_kernel_destroy(knn->k_bounds);
     for (int a = 0; a < 3; ++a)
         sluice_kernel_destroy(knn->k_sat[a]);
     sluice_kernel_destroy(knn->k_init);
@@ -119,6 +125,7 @@ void pm_knn_destroy(pm_knn *knn)
     sluice_stream_destroy(knn->dummy);
     sluice_stream_destroy(knn->map);
     sluice_stream_destroy(knn->map_start);
+    sluice_stream_destroy(knn->box);
     sluice_stream_destroy(knn->sat);
     free(knn);
 }
@@ -139,6 +146,10 @@ sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out)
         &knn->prog);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(knn->prog, "pm_knn_gather", &knn->k_gather);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_bounds", &knn->k_bounds);
+    if (st == SLUICE_OK)
+        st = sluice_stream_create(ctx, sizeof(float), 6, &knn->box);
     static const char *const sat_names[3] = {"pm_knn_sat_x", "pm_knn_sat_y", "pm_knn_sat_z"};
     for (int a = 0; st == SLUICE_OK && a < 3; ++a)
         st = sluice_kernel_create(knn->prog, sat_names[a], &knn->k_sat[a]);
@@ -217,7 +228,7 @@ static sluice_status check_stream(pm_knn *knn, sluice_stream *s, const char *wha
  * ulps of (x - lo) / cell, which is at most dims, in cell units, plus the
  * rounding of the coordinates themselves. */
 static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, uint32_t cap,
-                        pg_params *g, pm_knn_params *p)
+                        uint32_t map_stride, pg_params *g, pm_knn_params *p)
 {
     memset(g, 0, sizeof *g);
     memset(p, 0, sizeof *p);
@@ -238,6 +249,7 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
     p->max_r2 = o->max_radius * o->max_radius;
     p->normal_filter = o->normal_filter ? 1u : 0u;
     p->index_cap = cap;
+    p->map_stride = map_stride;
     p->shells_per_pass = o->shells_per_pass == PM_KNN_ALL_SHELLS
                              ? 0u
                              : (o->shells_per_pass ? o->shells_per_pass : 1u);
@@ -306,8 +318,14 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     step = "copying the map in cell order";
     sr_point_grid_stats gs;
     st = sr_point_grid_statistics(grid, &gs);
+    /* room for the blocks the search reads past the last photon */
+    size_t stride = (gs.stored + 2 * PM_MAP_BLOCK - 1) / PM_MAP_BLOCK * PM_MAP_BLOCK;
+    uint32_t stride32 = (uint32_t)stride;
+    if (st == SLUICE_OK && stride * PM_MAP_PLANES > UINT32_MAX)
+        return FAIL(knn, SLUICE_ERROR_LIMIT, "kNN: %zu photons are more than the map's %u",
+                    gs.stored, (unsigned)(UINT32_MAX / PM_MAP_PLANES - 2 * PM_MAP_BLOCK));
     if (st == SLUICE_OK)
-        st = ensure(knn->ctx, &knn->map, sizeof(pm_photon), gs.stored);
+        st = ensure(knn->ctx, &knn->map, sizeof(float), stride * PM_MAP_PLANES);
     /* cells back to back in cell order, so that a run of cells along x is
      * one run of photons (the stencil build's footprints have gaps, and the
      * bitonic build's starts of empty cells are not needed to be in order) */
@@ -323,16 +341,38 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     for (unsigned i = 0; st == SLUICE_OK && i < 7; ++i)
         st = sluice_kernel_set_stream(knn->k_gather, i, gather_in[i], 0);
     if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(knn->k_gather, 7, sizeof stride32, &stride32);
+    if (st == SLUICE_OK)
         st = sluice_kernel_launch_count(knn->k_gather, v.cells);
     if (st == SLUICE_OK)
-        st = sluice_stream_set_length(knn->map, gs.stored);
+        st = sluice_stream_set_length(knn->map, stride * PM_MAP_PLANES);
+    /* the photons' box bounds every distance: queries far from all photons
+     * (on the walls over glassball's floor) end at once */
+    uint32_t stored32 = (uint32_t)gs.stored;
+    float box[6];
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_bounds, 0, knn->map, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(knn->k_bounds, 1, sizeof stride32, &stride32);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(knn->k_bounds, 2, sizeof stored32, &stored32);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_bounds, 3, knn->box, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(knn->k_bounds, 6);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(knn->box, 6);
+    if (st == SLUICE_OK)
+        st = sluice_stream_download(knn->box, box, 6, NULL);
     if (st != SLUICE_OK)
         goto runtime_fail;
 
     step = "summing the cell counts";
     pg_params g;
     pm_knn_params p;
-    params_make(&v, o, indices ? cap : 0u, &g, &p);
+    params_make(&v, o, indices ? cap : 0u, stride32, &g, &p);
+    memcpy(p.box_lo, box, sizeof p.box_lo);
+    memcpy(p.box_hi, box + 3, sizeof p.box_hi);
     st = ensure(knn->ctx, &knn->sat, 4, v.cells);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(knn->k_sat[0], 0, v.cell_count, 0);

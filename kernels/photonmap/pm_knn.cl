@@ -13,24 +13,32 @@
  * outputs, since an emitting body runs twice. */
 #include "sluice.cl"
 
-/* Squared distance from x to the slab of cell j of an axis of n cells,
- * shrunk by the margin. The boundary cells reach to infinity: points
- * outside the box are clamped into them. */
-static inline float pm_gap2(float x, int j, int n, float lo, float cell, float margin)
+/* Squared distance from x to where the photons of cell j of an axis of n
+ * cells can lie, shrunk by the margin: the cell's slab (the boundary cells
+ * reach to infinity: points outside the box are clamped into them) cut to
+ * the photons' bounding box [blo, bhi]. */
+static inline float pm_gap2(float x, int j, int n, float lo, float cell, float margin, float blo,
+                            float bhi)
 {
-    float gap = 0.0f;
-    if (j > 0) {
-        float l = lo + (float)j * cell;
-        if (x < l)
-            gap = l - x;
-    }
-    if (j < n - 1) {
-        float h = lo + (float)(j + 1) * cell;
-        if (x > h)
-            gap = x - h;
-    }
+    float l = j > 0 ? fmax(lo + (float)j * cell, blo) : blo;
+    float h = j < n - 1 ? fmin(lo + (float)(j + 1) * cell, bhi) : bhi;
+    float gap = x < l ? l - x : (x > h ? x - h : 0.0f);
     gap -= margin;
     return gap > 0.0f ? gap * gap : 0.0f;
+}
+
+/* Squared distance from the point to the photons' bounding box, shrunk by
+ * the margins: no photon is nearer. */
+static inline float pm_box_d2(const float *qp, const pm_knn_params *p)
+{
+    float d2 = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+        float gap = qp[a] < p->box_lo[a] ? p->box_lo[a] - qp[a]
+                                         : (qp[a] > p->box_hi[a] ? qp[a] - p->box_hi[a] : 0.0f);
+        gap -= p->margin[a];
+        d2 += gap > 0.0f ? gap * gap : 0.0f;
+    }
+    return d2;
 }
 
 /* Narrows the cells [*a, *b] of an axis to those whose slab may lie within
@@ -77,7 +85,8 @@ static inline uint pm_cube_count(global const uint *sat, const int *qc, int s, c
 /* The explored cube [qc - s, qc + s]: the square of its inscribed radius d_s
  * (shrunk by the margin), and whether it covers the grid (a side on the
  * grid's boundary is infinitely far: nothing lies beyond it; then d_s is
- * infinite). */
+ * infinite). No photon outside the cube is nearer than d_s, nor nearer than
+ * the photons' bounding box: the larger of the two is returned. */
 static inline float pm_cube_d2(const float *qp, const int *qc, int s, const int *n,
                                const pg_params *g, const pm_knn_params *p, int *covered)
 {
@@ -93,13 +102,14 @@ static inline float pm_cube_d2(const float *qp, const int *qc, int s, const int 
             d = fmin(d, g->lo[a] + (float)(qc[a] + s + 1) * g->cell[a] - qp[a] - p->margin[a]);
         }
     }
-    return *covered ? INFINITY : (d > 0.0f ? d * d : 0.0f);
+    return *covered ? INFINITY : fmax(d > 0.0f ? d * d : 0.0f, pm_box_d2(qp, p));
 }
 
 /* A query's running estimate while it is in a kernel. */
 typedef struct pm_state {
     float px, py, pz, nx, ny, nz;
     float sr, sg, sb, r2;
+    float gx; /* squared distance along x to the photons' box (pm_gap2) */
     uint count, flags, q;
     global float *hd; /* exact: heap of squared distances (max at 0) */
     global uint *hi;  /* exact: heap of places in the cell-ordered map */
@@ -151,51 +161,129 @@ static inline void pm_heap_add(pm_state *st, uint k, float d2, uint id)
     hi[j] = id;
 }
 
+/* Horizontal sums and maximum of a block. */
+static inline float pm_hsum8(float8 v)
+{
+    float4 a = v.lo + v.hi;
+    float2 b = a.lo + a.hi;
+    return b.x + b.y;
+}
+
+static inline int pm_hsum8i(int8 v)
+{
+    int4 a = v.lo + v.hi;
+    int2 b = a.lo + a.hi;
+    return b.x + b.y;
+}
+
+static inline float pm_hmax8(float8 v)
+{
+    float4 a = fmax(v.lo, v.hi);
+    float2 b = fmax(a.lo, a.hi);
+    return fmax(b.x, b.y);
+}
+
 /* Examines the photons map[b .. e) (Purcell Fig. 6.6): in the cell-ordered
  * copy of the map (pm_knn_gather) a run of cells along x is one contiguous
- * run of photons, examined in the order of their cells. */
+ * run of photons, examined in the order of their cells. The planes are read
+ * in blocks of PM_MAP_BLOCK photons, their distances and filters computed
+ * side by side (explicit vectors: the CPU's SIMD lanes whatever the
+ * work-group vectorizer makes of the loop around it); the photons a block
+ * takes are added in order, so the result is the one-at-a-time search's,
+ * except for the order of the power sums. */
 static inline void pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params *p, uint exact,
-                               global const pm_photon *map, global uint *indices)
+                               global const float *map, global uint *indices)
 {
-    for (uint j = b; j < e; ++j) {
-        global const pm_photon *ph = map + j;
-        float dx = ph->px - st->px, dy = ph->py - st->py, dz = ph->pz - st->pz;
-        float d2 = dx * dx + dy * dy + dz * dz;
-        if (!(d2 <= p->max_r2))
-            continue;
-        if (p->normal_filter && !(st->nx * ph->dx + st->ny * ph->dy + st->nz * ph->dz < 0.0f))
+    uint stride = p->map_stride;
+    const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
+    float8 ar = (float8)(0.0f), ag = (float8)(0.0f), ab = (float8)(0.0f);
+    for (uint j = b; j < e; j += PM_MAP_BLOCK) {
+        float8 dx = vload8(0, map + PM_MAP_X * stride + j) - st->px;
+        float8 dy = vload8(0, map + PM_MAP_Y * stride + j) - st->py;
+        float8 dz = vload8(0, map + PM_MAP_Z * stride + j) - st->pz;
+        float8 d2 = dx * dx + dy * dy + dz * dz;
+        int8 m = (lane < (int8)((int)(e - j))) & (d2 <= (float8)(p->max_r2));
+        if (p->normal_filter) {
+            float8 c = st->nx * vload8(0, map + PM_MAP_DX * stride + j) +
+                       st->ny * vload8(0, map + PM_MAP_DY * stride + j) +
+                       st->nz * vload8(0, map + PM_MAP_DZ * stride + j);
+            m &= c < (float8)(0.0f);
+        }
+        if (!exact && st->count >= p->k)
+            m &= d2 <= (float8)(st->r2);
+        if (exact && st->count == p->k)
+            m &= d2 < (float8)(st->hd[0]);
+        if (!any(m))
             continue;
         if (exact) {
-            pm_heap_add(st, p->k, d2, j);
+            /* Jensen's heap, one photon at a time, in order */
+            float dd[PM_MAP_BLOCK];
+            int mm[PM_MAP_BLOCK];
+            vstore8(d2, 0, dd);
+            vstore8(m, 0, mm);
+            for (int l = 0; l < PM_MAP_BLOCK; ++l)
+                if (mm[l])
+                    pm_heap_add(st, p->k, dd[l], j + (uint)l);
             continue;
         }
-        if (st->count < p->k)
-            st->r2 = fmax(st->r2, d2);
-        else if (!(d2 <= st->r2))
-            continue;
-        st->sr += ph->pr;
-        st->sg += ph->pg;
-        st->sb += ph->pb;
+        if (st->count < p->k) {
+            /* each of the first k photons grows the radius: all of the
+             * block's when they come before the k-th, else one at a time */
+            if (st->count + (uint)(-pm_hsum8i(m)) <= p->k) {
+                st->r2 = fmax(st->r2, pm_hmax8(select((float8)(0.0f), d2, m)));
+            } else {
+                float dd[PM_MAP_BLOCK];
+                int mm[PM_MAP_BLOCK];
+                vstore8(d2, 0, dd);
+                vstore8(m, 0, mm);
+                uint c = st->count;
+                for (int l = 0; l < PM_MAP_BLOCK; ++l) {
+                    if (!mm[l])
+                        continue;
+                    if (c < p->k)
+                        st->r2 = fmax(st->r2, dd[l]);
+                    else if (!(dd[l] <= st->r2))
+                        mm[l] = 0;
+                    c += mm[l] ? 1u : 0u;
+                }
+                m = vload8(0, mm);
+            }
+        }
         if (p->index_cap) {
-            if (st->count < p->index_cap)
-                indices[(ulong)st->q * p->index_cap + st->count] = ph->flags;
-            else
-                st->flags |= PM_KNN_INDICES_CUT;
+            int mm[PM_MAP_BLOCK];
+            vstore8(m, 0, mm);
+            uint c = st->count;
+            for (int l = 0; l < PM_MAP_BLOCK; ++l) {
+                if (!mm[l])
+                    continue;
+                if (c < p->index_cap)
+                    indices[(ulong)st->q * p->index_cap + c] =
+                        as_uint(map[PM_MAP_ID * stride + j + (uint)l]);
+                else
+                    st->flags |= PM_KNN_INDICES_CUT;
+                ++c;
+            }
         }
-        st->count++;
+        ar += select((float8)(0.0f), vload8(0, map + PM_MAP_R * stride + j), m);
+        ag += select((float8)(0.0f), vload8(0, map + PM_MAP_G * stride + j), m);
+        ab += select((float8)(0.0f), vload8(0, map + PM_MAP_B * stride + j), m);
+        st->count += (uint)(-pm_hsum8i(m));
     }
+    st->sr += pm_hsum8(ar);
+    st->sg += pm_hsum8(ag);
+    st->sb += pm_hsum8(ab);
 }
 
 /* The cell-ordered copy of the photon map, one work-item per cell: cell c's
- * photons go to map[map_start[c] ..), their power scaled by the cell's
- * arrived / stored count (Purcell's power redistribution for the stencil
- * build; exactly 1 for the others) and their flags replaced by their index
- * in the caller's photon stream. The search then reads each cell as one
- * contiguous run instead of through the order indirection. */
+ * photons go to map[map_start[c] ..) of every plane, their power scaled by
+ * the cell's arrived / stored count (Purcell's power redistribution for the
+ * stencil build; exactly 1 for the others) and their index in the caller's
+ * photon stream kept. The search then reads each cell as one contiguous run
+ * instead of through the order indirection. */
 __kernel void pm_knn_gather(SLUICE_PARAMS, global const uint *order, global const uint *cell_start,
                             global const uint *cell_count, global const uint *cell_arrived,
                             global const uint *map_start, global const pm_photon *photons,
-                            global pm_photon *map)
+                            global float *map, uint stride)
 {
     SLUICE_FOR_EACH (c) {
         uint n = cell_count[c], from = cell_start[c], to = map_start[c];
@@ -203,12 +291,32 @@ __kernel void pm_knn_gather(SLUICE_PARAMS, global const uint *order, global cons
         for (uint j = 0; j < n; ++j) {
             uint id = order[from + j];
             pm_photon ph = photons[id];
-            ph.pr *= scale;
-            ph.pg *= scale;
-            ph.pb *= scale;
-            ph.flags = id;
-            map[to + j] = ph;
+            global float *o = map + to + j;
+            o[PM_MAP_X * stride] = ph.px;
+            o[PM_MAP_Y * stride] = ph.py;
+            o[PM_MAP_Z * stride] = ph.pz;
+            o[PM_MAP_DX * stride] = ph.dx;
+            o[PM_MAP_DY * stride] = ph.dy;
+            o[PM_MAP_DZ * stride] = ph.dz;
+            o[PM_MAP_R * stride] = ph.pr * scale;
+            o[PM_MAP_G * stride] = ph.pg * scale;
+            o[PM_MAP_B * stride] = ph.pb * scale;
+            o[PM_MAP_ID * stride] = as_float(id);
         }
+    }
+}
+
+/* The bounding box of the map's n photons: work-item i takes the minimum
+ * (i < 3) or the maximum (i >= 3) along axis i % 3. Empty: +inf / -inf. */
+__kernel void pm_knn_bounds(SLUICE_PARAMS, global const float *map, uint stride, uint n,
+                            global float *box)
+{
+    SLUICE_FOR_EACH (i) {
+        global const float *v = map + (i % 3u) * stride;
+        float b = i < 3u ? INFINITY : -INFINITY;
+        for (uint j = 0; j < n; ++j)
+            b = i < 3u ? fmin(b, v[j]) : fmax(b, v[j]);
+        box[i] = b;
     }
 }
 
@@ -266,11 +374,12 @@ __kernel void pm_knn_init(SLUICE_PARAMS, global pm_knn_result *results, global u
  * the bound; an empty row costs two reads. */
 static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const int *n,
                                const pg_params *g, const pm_knn_params *p, uint exact,
-                               global const pm_photon *map, global const uint *map_start,
+                               global const float *map, global const uint *map_start,
                                global const uint *cell_count, global uint *indices)
 {
     for (int z = b0[2]; z <= b1[2]; ++z) {
-        float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2]);
+        float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2], p->box_lo[2],
+                           p->box_hi[2]);
         if (gz > pm_bound(st, p, exact))
             continue;
         for (int y = b0[1]; y <= b1[1]; ++y) {
@@ -279,8 +388,9 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
             if (map_start[row + (uint)b0[0]] == map_start[last] + cell_count[last])
                 continue;
             float t = pm_bound(st, p, exact) - gz -
-                      pm_gap2(st->py, y, n[1], g->lo[1], g->cell[1], p->margin[1]);
-            if (t < 0.0f)
+                      pm_gap2(st->py, y, n[1], g->lo[1], g->cell[1], p->margin[1], p->box_lo[1],
+                              p->box_hi[1]);
+            if (t < st->gx)
                 continue;
             int xa = b0[0], xb = b1[0];
             pm_trim(st->px, t, g->lo[0], g->inv_cell[0], g->dims[0], p->margin[0], &xa, &xb);
@@ -295,7 +405,7 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
 
 /* One shell for every live query (see the top of the file). */
 __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const pm_query *queries,
-                          global const pm_photon *map, global const uint *map_start,
+                          global const float *map, global const uint *map_start,
                           global const uint *cell_count, global const uint *sat, pg_params g,
                           pm_knn_params p, uint exact, uint base, global pm_knn_result *results,
                           global float *heap_d2, global uint *heap_id, global uint *indices)
@@ -326,6 +436,7 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
             continue;
         }
         float qp[3] = {Q.px, Q.py, Q.pz};
+        st.gx = pm_gap2(Q.px, 0, 1, g.lo[0], g.cell[0], p.margin[0], p.box_lo[0], p.box_hi[0]);
         int qc[3], n[3];
         for (int a = 0; a < 3; ++a) {
             n[a] = (int)g.dims[a];
@@ -409,12 +520,13 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
             /* the estimate from the heap */
             float sr = 0.0f, sg = 0.0f, sb = 0.0f;
             for (uint j = 0; j < st.count; ++j) {
-                global const pm_photon *ph = map + st.hi[j];
-                sr += ph->pr;
-                sg += ph->pg;
-                sb += ph->pb;
+                uint at = st.hi[j];
+                sr += map[PM_MAP_R * p.map_stride + at];
+                sg += map[PM_MAP_G * p.map_stride + at];
+                sb += map[PM_MAP_B * p.map_stride + at];
                 if (p.index_cap && j < p.index_cap)
-                    indices[(ulong)q * p.index_cap + j] = ph->flags;
+                    indices[(ulong)q * p.index_cap + j] =
+                        as_uint(map[PM_MAP_ID * p.map_stride + at]);
             }
             if (p.index_cap && st.count > p.index_cap)
                 r.flags |= PM_KNN_INDICES_CUT;

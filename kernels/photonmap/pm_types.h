@@ -66,7 +66,28 @@ typedef struct pm_knn_params {
     float margin[3];        /* per axis: how much the shell distances are shrunk
                                so that rounding in the cell function never makes
                                a shell look farther than a photon in it */
+    rt_u32 map_stride;      /* floats per plane of the cell-ordered map */
+    float box_lo[3];        /* the stored photons' bounding box (lo > hi when */
+    float box_hi[3];        /* there are none): no photon lies outside it */
 } pm_knn_params;
+
+/** The kNN search's cell-ordered copy of the photon map is a structure of
+ *  arrays, PM_MAP_PLANES planes of pm_knn_params.map_stride floats each, in
+ *  this order (PM_MAP_ID holds the photon's index in the caller's stream, as
+ *  bits). The search reads the planes in blocks of PM_MAP_BLOCK floats, which
+ *  may run PM_MAP_BLOCK - 1 past the last photon: the stride leaves that room. */
+#define PM_MAP_X 0
+#define PM_MAP_Y 1
+#define PM_MAP_Z 2
+#define PM_MAP_DX 3
+#define PM_MAP_DY 4
+#define PM_MAP_DZ 5
+#define PM_MAP_R 6
+#define PM_MAP_G 7
+#define PM_MAP_B 8
+#define PM_MAP_ID 9
+#define PM_MAP_PLANES 10
+#define PM_MAP_BLOCK 8
 
 /** rt_ray.flags of a photon ray whose path so far went only through
  *  mirrors and glass (it becomes a PM_PHOTON_CAUSTIC photon). */
