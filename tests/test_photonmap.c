@@ -203,6 +203,9 @@ static void test_cli(const char *exe)
         {"--shells-per-pass 0", "--shells-per-pass"},
         {"--shells-per-pass some", "--shells-per-pass"},
         {"--time x", "--time"},
+        {"--alpha 1.5", "--alpha"},
+        {"--alpha 0", "--alpha"},
+        {"--progressive --alpha", "--alpha"},
         {"--frobnicate 1", "--frobnicate"},
         {"--scene no-such-scene.obj", "no-such-scene.obj"},
     };
@@ -228,6 +231,24 @@ static void test_cli(const char *exe)
     CHECK(strstr(out, "\"trace_photons\"") && strstr(out, "\"stored\"") &&
               strstr(out, "\"live_per_pass\""),
           "statistics JSON: %s", out);
+    /* progressive: the statistics name the radius, and it shrinks */
+    snprintf(cmd, sizeof cmd,
+             "%s --scene glassball --size 32x24 --photons 1000 --progressive --spp 4 --out "
+             "pm_cli.png --stats pm_ppm.json --quiet",
+             exe);
+    CHECK(check_run(cmd, out, sizeof out) == 0, "--progressive: %s", out);
+    f = fopen("pm_ppm.json", "r");
+    n = f ? fread(out, 1, sizeof out - 1, f) : 0;
+    out[n] = '\0';
+    if (f)
+        fclose(f);
+    const char *pr = strstr(out, "\"progressive\"");
+    double a = 0, r0 = 0, r3 = 0;
+    CHECK(pr &&
+              sscanf(pr, "\"progressive\": {\"alpha\": %lf, \"radius0\": %lf, \"radius\": %lf", &a,
+                     &r0, &r3) == 3 &&
+              fabs(r3 * r3 / (r0 * r0) - (1 + a) / 2 * (2 + a) / 3 * (3 + a) / 4) < 1e-4,
+          "progressive radius: %s", out);
     /* intermediate images: pm_pass-0000.png on; a folder that does not
      * exist is an error naming the file */
     remove("pm_pass-0000.png");

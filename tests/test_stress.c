@@ -12,6 +12,9 @@
  *   furnace_photonmap   the same sphere through the whole photon mapper
  *                       (direct light by shadow rays, indirect by the kNN
  *                       estimate): within 1%
+ *   furnace_progressive progressive photon mapping on the same sphere: its
+ *                       RMS error falls with samples (bound: 16 samples
+ *                       below 0.6 of 1; theory 0.40), mean within 1%
  *   accumulation        10^6 samples per pixel through the film's 64-bit fixed
  *                       point against a double sum: within one quantum
  *                       (2^-24) of the mean; a float sum's drift is printed
@@ -326,6 +329,69 @@ static void test_furnace_knn(void)
     pm_photons_destroy(ph);
     pm_renderer_destroy(r);
     sr_scene_destroy(scene);
+}
+
+/* Progressive photon mapping converges: on the furnace, the pixels' RMS
+ * error against the analytic radiance after 1, 4 and 16 samples. Each
+ * sample traces new photons with a smaller radius, so both the noise and the
+ * bias fall: MSE ~ N^(-2/3) (Knaus and Zwicker 2011), RMS ~ N^(-1/3), 0.40
+ * from 1 to 16 samples; the bound is 0.6. The same renderer without it keeps
+ * its one photon map: its error stays (printed beside, not bounded). */
+static void test_furnace_progressive(void)
+{
+    sr_scene *s = furnace_scene();
+    if (!s)
+        return;
+    const double expect = furnace_radiance();
+    double rms[2][3] = {{0, 0, 0}, {0, 0, 0}}, mean16 = 0;
+    for (int prog = 0; prog < 2; ++prog) {
+        char err[512] = "";
+        pm_options o = pm_options_default();
+        o.width = 32;
+        o.height = 32;
+        o.max_depth = 64;
+        o.photons = 20000;
+        o.k = 100;
+        o.seed = 11;
+        o.progressive = prog;
+        pm_renderer *r = NULL;
+        sr_image *img = NULL;
+        sluice_status st = pm_renderer_create(ctx, s, &o, &r, err, sizeof err);
+        if (st == SLUICE_OK)
+            st = sr_image_create(32, 32, 3, &img, err, sizeof err);
+        for (unsigned n = 1, at = 0; st == SLUICE_OK && n <= 16; ++n) {
+            st = pm_renderer_sample(r, err, sizeof err);
+            if (st != SLUICE_OK || (n != 1 && n != 4 && n != 16))
+                continue;
+            size_t bad = 0;
+            st = sr_film_resolve(pm_renderer_film(r), 1.0 / n, img, &bad);
+            if (st != SLUICE_OK)
+                break;
+            const float *px = sr_image_pixels_const(img);
+            double se = 0;
+            for (size_t j = 0; j < 32 * 32; ++j)
+                se += (px[3 * j + 1] - expect) * (px[3 * j + 1] - expect);
+            rms[prog][at++] = sqrt(se / (32 * 32)) / expect;
+            if (prog && n == 16)
+                mean16 = image_mean(img, 1);
+            CHECK(bad == 0, "progressive furnace: %zu non-finite pixels", bad);
+        }
+        CHECK(st == SLUICE_OK, "progressive furnace: %s", err);
+        sr_image_destroy(img);
+        pm_renderer_destroy(r);
+    }
+    double slope = log(rms[1][2] / rms[1][0]) / log(16.0);
+    printf("furnace, relative RMS error after 1, 4, 16 samples: progressive %.4f %.4f %.4f "
+           "(slope %.2f, theory -0.33; bound: 16 samples below 0.6 of 1), fixed map %.4f %.4f "
+           "%.4f; progressive mean after 16 %+.2f%% (bound 1%%)\n",
+           rms[1][0], rms[1][1], rms[1][2], slope, rms[0][0], rms[0][1], rms[0][2],
+           100 * (mean16 / expect - 1));
+    CHECK(rms[1][2] < 0.6 * rms[1][0] && rms[1][1] < rms[1][0],
+          "progressive photon mapping does not converge: RMS %.4f, %.4f, %.4f", rms[1][0],
+          rms[1][1], rms[1][2]);
+    CHECK(fabs(mean16 / expect - 1) < 0.01, "progressive furnace mean off by %.2f%%",
+          100 * fabs(mean16 / expect - 1));
+    sr_scene_destroy(s);
 }
 
 /* ------------------------------------------------------------------ */
@@ -647,6 +713,7 @@ int main(void)
     test_furnace_knn();
     test_furnace_path();
     test_furnace_photonmap();
+    test_furnace_progressive();
     test_scaled_translated();
     test_grazing();
     test_leaks();

@@ -245,7 +245,9 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
     g->cells = v->cells;
     g->stride = sizeof(pm_photon) / 4;
     g->slots = v->slots;
-    p->k = o->k;
+    /* radius mode: the at-least search never full, so every photon within
+     * the maximum radius */
+    p->k = o->mode == PM_KNN_RADIUS ? UINT32_MAX : o->k;
     p->max_r2 = o->max_radius * o->max_radius;
     p->normal_filter = o->normal_filter ? 1u : 0u;
     p->index_cap = cap;
@@ -266,12 +268,12 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         memset(stats, 0, sizeof *stats);
     if (!grid || !o)
         return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: NULL argument");
-    if (o->k == 0 || o->k > PM_KNN_MAX_K)
+    if (o->mode != PM_KNN_RADIUS && (o->k == 0 || o->k > PM_KNN_MAX_K))
         return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: k = %u (1 .. %u allowed)", o->k,
                     PM_KNN_MAX_K);
     if (!(o->max_radius > 0.0f)) /* also NaN; INFINITY is fine */
         return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: the maximum radius must be > 0");
-    if (o->mode != PM_KNN_ATLEAST && o->mode != PM_KNN_EXACT)
+    if (o->mode != PM_KNN_ATLEAST && o->mode != PM_KNN_EXACT && o->mode != PM_KNN_RADIUS)
         return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: unknown mode %d", (int)o->mode);
     if (n > UINT32_MAX / 2)
         return FAIL(knn, SLUICE_ERROR_LIMIT, "kNN: %zu queries exceed the limit of %u", n,

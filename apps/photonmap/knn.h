@@ -50,7 +50,9 @@
 /** The search's rule. */
 typedef enum pm_knn_mode {
     PM_KNN_ATLEAST = 0, /**< Purcell's kNN-grid: all photons within the final radius */
-    PM_KNN_EXACT = 1    /**< Jensen's k nearest (max-heap) */
+    PM_KNN_EXACT = 1,   /**< Jensen's k nearest (max-heap) */
+    PM_KNN_RADIUS = 2   /**< every photon within max_radius (k is not read):
+                             progressive photon mapping's search */
 } pm_knn_mode;
 
 /** Most photons sought per query. */
@@ -75,9 +77,9 @@ typedef sluice_status (*pm_knn_pass_fn)(void *user, unsigned pass, size_t answer
 
 /** What to search for. */
 typedef struct pm_knn_options {
-    uint32_t k;             /**< photons sought (1 .. PM_KNN_MAX_K) */
+    uint32_t k;             /**< photons sought (1 .. PM_KNN_MAX_K; radius mode: unused) */
     float max_radius;       /**< photons farther than this are never used (> 0, may be INFINITY) */
-    pm_knn_mode mode;       /**< PM_KNN_ATLEAST or PM_KNN_EXACT */
+    pm_knn_mode mode;       /**< PM_KNN_ATLEAST, PM_KNN_EXACT or PM_KNN_RADIUS */
     int normal_filter;      /**< non-zero: only photons arriving on the side the
                                  query's normal faces (dot(n, d) < 0) */
     pm_knn_pass_fn on_pass; /**< NULL, or called after every pass */

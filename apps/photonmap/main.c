@@ -46,6 +46,12 @@ static void usage(FILE *out)
           "  --max-depth N            mirror/glass bounces of eye rays and photon bounces\n"
           "                           (default: the scene's)\n"
           "  --exec stream|fused      the tracer's execution mode (default stream)\n"
+          "  --progressive            progressive photon mapping: every sample traces new\n"
+          "                           photons and gathers all within a radius that shrinks\n"
+          "                           as r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1) (Knaus and\n"
+          "                           Zwicker 2011): converges as samples grow; r_0 is\n"
+          "                           --max-radius or the radius k photons would take\n"
+          "  --alpha A                progressive radius reduction, 0 < A < 1 (default 2/3)\n"
           "  --pass-images FILE       also write the image after every kNN pass, the\n"
           "                           estimates as they stand (Purcell 6.3.4): FILE with\n"
           "                           -0000, -0001, ... before its extension (.png, .exr,\n"
@@ -55,7 +61,8 @@ static void usage(FILE *out)
           "  " PROG " --scene glassball --out glassball.png\n"
           "  " PROG " --scene ring --map stencil --grid 250x1x250 --stats ring.json\n"
           "  " PROG " --scene cornell --photons 65000 --k 500 --grid 25x25x50 --light-samples 32\n"
-          "  " PROG " --scene glassball --pass-images frames/glassball.png\n",
+          "  " PROG " --scene glassball --pass-images frames/glassball.png\n"
+          "  " PROG " --scene glassball --progressive --spp 64 --out glassball-ppm.png\n",
           out);
 }
 
@@ -85,6 +92,10 @@ static int parse(int argc, char **argv, cli *c)
             continue;
         if (strncmp(a, "--", 2) != 0)
             return sr_cli_bad(PROG, a, NULL, "unexpected argument");
+        if (!strcmp(a, "--progressive")) { /* the one option without a value */
+            c->opt.progressive = 1;
+            continue;
+        }
         if (i + 1 >= argc)
             return sr_cli_bad(PROG, a, NULL, "needs a value");
         const char *v = argv[++i];
@@ -151,6 +162,11 @@ static int parse(int argc, char **argv, cli *c)
                 c->opt.shells_per_pass = PM_KNN_ALL_SHELLS;
             else if (!sr_cli_uint(v, 1, 1u << 20, &c->opt.shells_per_pass))
                 return sr_cli_bad(PROG, a, v, "expected all or a whole number from 1 to 1048576");
+        } else if (!strcmp(a, "--alpha")) {
+            double al;
+            if (!sr_cli_double(v, 1e-6, 1.0 - 1e-6, &al))
+                return sr_cli_bad(PROG, a, v, "expected a number between 0 and 1");
+            c->opt.alpha = (float)al;
         } else if (!strcmp(a, "--pass-images")) {
             if ((k = sr_cli_image_path(PROG, a, v)) != 0)
                 return k;
@@ -231,7 +247,9 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
     if (!json) {
         fprintf(f, "scene %s, %ux%u, %u spp, map %s, kNN %s, k %u, max radius %g\n",
                 c->common.scene, o->width, o->height, spp, map_names[o->map],
-                o->knn == PM_KNN_EXACT ? "exact" : "atleast", o->k, (double)s->max_radius);
+                o->progressive ? "radius (progressive)"
+                               : (o->knn == PM_KNN_EXACT ? "exact" : "atleast"),
+                o->k, (double)s->max_radius);
         fprintf(f,
                 "phases (s): trace photons %.3f, build map %.3f, trace rays %.3f, radiance "
                 "estimate %.3f, total %.3f\n",
@@ -268,6 +286,11 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
                     "intermediate images: %u written in %.3f s (left out of the phases, counted "
                     "in the total)\n",
                     s->pass_images, s->pass_images_s);
+        if (o->progressive)
+            fprintf(f,
+                    "progressive: alpha %g, radius of the last sample %.4g (r_0 %.4g, "
+                    "r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1))\n",
+                    (double)o->alpha, (double)s->radius, (double)s->radius0);
         fprintf(f, "skipped: %s\n", pm_renderer_skipped(r));
         if (sluice_profile_enabled(ctx))
             sluice_profile_print(ctx, f);
@@ -280,7 +303,11 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
             "\",\n  \"width\": %u, \"height\": %u, \"spp\": %u, \"map\": \"%s\", \"knn\": "
             "\"%s\", \"k\": %u, \"max_radius\": %g,\n",
             o->width, o->height, spp, map_names[o->map],
-            o->knn == PM_KNN_EXACT ? "exact" : "atleast", o->k, (double)s->max_radius);
+            o->progressive ? "radius" : (o->knn == PM_KNN_EXACT ? "exact" : "atleast"), o->k,
+            (double)s->max_radius);
+    if (o->progressive)
+        fprintf(f, "  \"progressive\": {\"alpha\": %g, \"radius0\": %g, \"radius\": %g},\n",
+                (double)o->alpha, (double)s->radius0, (double)s->radius);
     fprintf(f,
             "  \"phases\": {\"trace_photons\": %.6f, \"build_map\": %.6f, \"trace_rays\": %.6f, "
             "\"radiance_estimate\": %.6f, \"total\": %.6f},\n",

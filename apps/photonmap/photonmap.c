@@ -32,6 +32,8 @@ struct pm_renderer {
     size_t map_count;
     int prepared;
     float max_radius;
+    float radius2;             /* progressive: this sample's squared search radius */
+    int map_built;             /* the map of this sample is built (progressive) */
     double estimate_in_sample; /* seconds of estimates during the current sample */
     sluice_status gather_status;
     /* intermediate images (pm_options.pass_image): the current gather's
@@ -62,6 +64,7 @@ pm_options pm_options_default(void)
     o.knn = PM_KNN_ATLEAST;
     o.shells_per_pass = 1;
     o.tracer = rt_tracer_options_default();
+    o.alpha = 2.0f / 3.0f;
     return o;
 }
 
@@ -124,6 +127,9 @@ static sluice_status add_estimates(pm_renderer *r, sluice_stream *points, sluice
         st = sluice_kernel_set_stream(r->k_add, 2, accum, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(r->k_add, 3, sizeof a, &a);
+    float fixed = r->opt.progressive ? r->radius2 : 0.0f;
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(r->k_add, 4, sizeof fixed, &fixed);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(r->k_add);
     return st;
@@ -274,15 +280,27 @@ static sluice_status photon_bounds(pm_renderer *r, const sr_scene_stats *ss, flo
     return st;
 }
 
-sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
+/* Traces the photons of `seed`, chooses the radius and grid and builds the
+ * map; the phases' times and the photon counts add up over calls. */
+static sluice_status trace_and_build(pm_renderer *r, uint32_t seed, char *err, size_t err_size)
 {
-    if (!r)
-        return SLUICE_ERROR_INVALID_ARGUMENT;
-    if (r->prepared)
-        return SLUICE_OK;
-    pm_photon_options po = {r->opt.photons, r->opt.max_depth, r->opt.seed};
+    pm_photon_options po = {r->opt.photons, r->opt.max_depth, seed};
+    pm_photon_stats before = r->stats.photons;
     sluice_status st = pm_photons_trace(r->photons, &po, &r->map, &r->map_count, &r->stats.photons);
-    r->stats.trace_photons_s = r->stats.photons.seconds;
+    if (r->stats.samples > 0) {
+        pm_photon_stats *ps = &r->stats.photons;
+        ps->emitted += before.emitted;
+        ps->stored += before.stored;
+        ps->caustic += before.caustic;
+        ps->bounced += before.bounced;
+        ps->left_scene += before.left_scene;
+        ps->absorbed += before.absorbed;
+        ps->depth_limit += before.depth_limit;
+        ps->nonfinite += before.nonfinite;
+        ps->passes += before.passes;
+        ps->batches += before.batches;
+    }
+    r->stats.trace_photons_s += r->stats.photons.seconds;
     if (st != SLUICE_OK) {
         sr_set_error(err, err_size, "tracing photons: %s", sluice_context_error(r->ctx));
         return st;
@@ -293,7 +311,9 @@ sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
      * cells are a quarter of the expected radius: photons crowd into
      * caustics, and cells as large as the radius there make every estimate
      * take whole cells (blocky caustics on glassball; a quarter is about
-     * Purcell's 250x1x250 there). */
+     * Purcell's 250x1x250 there). Progressive: the radius search's radius
+     * r_i starts at the expected radius (or max_radius when set) and cells
+     * are half of it. */
     const sr_scene_stats *ss = sr_scene_statistics(r->scene);
     double area = storing_area(r->scene);
     size_t n = r->map_count ? r->map_count : 1;
@@ -304,10 +324,25 @@ sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
     diag = sqrtf(diag);
     if (!(expected > 0) || !isfinite(expected))
         expected = diag > 0 ? diag / 16 : 1.0f;
-    r->max_radius = r->opt.max_radius > 0 ? r->opt.max_radius : fminf(3.0f * expected, diag);
-    if (!(r->max_radius > 0))
-        r->max_radius = 1.0f;
+    float cell = expected / 4.0f;
+    if (r->opt.progressive) {
+        if (r->stats.samples == 0) {
+            float r0 = r->opt.max_radius > 0 ? r->opt.max_radius : expected;
+            r->radius2 = r0 * r0;
+            r->stats.radius0 = r0;
+        } else {
+            double i = r->stats.samples;
+            r->radius2 = (float)(r->radius2 * (i + r->opt.alpha) / (i + 1.0));
+        }
+        r->max_radius = sqrtf(r->radius2);
+        cell = r->max_radius / 2.0f;
+    } else {
+        r->max_radius = r->opt.max_radius > 0 ? r->opt.max_radius : fminf(3.0f * expected, diag);
+        if (!(r->max_radius > 0))
+            r->max_radius = 1.0f;
+    }
     r->stats.max_radius = r->max_radius;
+    r->stats.radius = r->opt.progressive ? r->max_radius : 0.0f;
     char msg[256] = "";
     if (r->opt.grid_dims[0])
         st = sr_point_grid_desc_dims(ss->bounds_min, ss->bounds_max, r->opt.grid_dims,
@@ -318,8 +353,7 @@ sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
         float lo[3], hi[3];
         st = photon_bounds(r, ss, lo, hi);
         if (st == SLUICE_OK)
-            st = sr_point_grid_desc_auto(lo, hi, n, expected / 4.0f, &r->stats.map_grid, msg,
-                                         sizeof msg);
+            st = sr_point_grid_desc_auto(lo, hi, n, cell, &r->stats.map_grid, msg, sizeof msg);
         else
             snprintf(msg, sizeof msg, "reading the photons: %s", sluice_context_error(r->ctx));
     }
@@ -330,13 +364,26 @@ sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
     double t0 = sr_clock_seconds();
     st = sr_point_grid_build(r->grid, &r->stats.map_grid, r->map, sizeof(pm_photon), r->map_count,
                              r->opt.map, r->opt.slots);
-    r->stats.build_map_s = sr_clock_seconds() - t0;
+    r->stats.build_map_s += sr_clock_seconds() - t0;
     if (st == SLUICE_OK)
         st = sr_point_grid_statistics(r->grid, &r->stats.map);
     if (st != SLUICE_OK) {
         sr_set_error(err, err_size, "building the photon map: %s", sr_point_grid_error(r->grid));
         return st;
     }
+    return SLUICE_OK;
+}
+
+sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
+{
+    if (!r)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (r->prepared)
+        return SLUICE_OK;
+    sluice_status st = trace_and_build(r, r->opt.seed, err, err_size);
+    if (st != SLUICE_OK)
+        return st;
+    r->map_built = 1;
     char *k = r->skipped;
     size_t ks = sizeof r->skipped;
     snprintf(k, ks, "%s", r->stats.photons.skipped);
@@ -375,8 +422,10 @@ static sluice_status gather(void *user, sluice_stream *points, size_t n)
         st = sluice_kernel_launch(r->k_queries);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(r->queries, n);
-    pm_knn_options ko = {r->opt.k, r->max_radius,         r->opt.knn, 1, NULL,
-                         NULL,     r->opt.shells_per_pass};
+    /* progressive: every photon within r_i */
+    pm_knn_options ko = {
+        r->opt.k, r->max_radius,         r->opt.progressive ? PM_KNN_RADIUS : r->opt.knn, 1, NULL,
+        NULL,     r->opt.shells_per_pass};
     if (r->opt.pass_image) {
         ko.on_pass = preview_pass;
         ko.on_pass_user = r;
@@ -425,8 +474,14 @@ sluice_status pm_renderer_sample(pm_renderer *r, char *err, size_t err_size)
     if (!r)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     sluice_status st = pm_renderer_prepare(r, err, err_size);
+    if (st == SLUICE_OK && r->opt.progressive && !r->map_built) {
+        /* new photons, a smaller radius: sample i's own estimate */
+        uint32_t seed = r->opt.seed ^ (0x9E3779B9u * (uint32_t)(r->stats.samples + 1));
+        st = trace_and_build(r, seed, err, err_size);
+    }
     if (st != SLUICE_OK)
         return st;
+    r->map_built = 0;
     r->err = err;
     r->err_size = err_size;
     r->gather_status = SLUICE_OK;

@@ -48,10 +48,19 @@ typedef struct pm_options {
     rt_tracer_options tracer;     /**< the tracer's options */
     pm_pass_image_fn pass_image;  /**< NULL, or called after every kNN pass */
     void *pass_image_user;        /**< passed to pass_image */
+    /** Non-zero: progressive photon mapping (Hachisuka et al. 2009, in Knaus
+     *  and Zwicker's 2011 form): every sample traces new photons, rebuilds the
+     *  map and estimates with a radius search of radius r_i, where r_0 is the
+     *  radius k photons would take spread evenly (or max_radius when set) and
+     *  r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1); the image is the mean of the
+     *  samples, and its bias and noise both vanish as samples grow. */
+    int progressive;
+    float alpha; /**< progressive radius reduction, 0 < alpha < 1 (2/3) */
 } pm_options;
 
 /** Defaults: 512x384, seed 1, 1 light sample, depth 5, 16,000 photons,
- *  k = 64, automatic radius and grid, count build, 256 slots, atleast. */
+ *  k = 64, automatic radius and grid, count build, 256 slots, atleast, not
+ *  progressive (alpha 2/3 when it is). */
 pm_options pm_options_default(void);
 
 /** Figures of a render (Purcell Table 6.1's phases and more). */
@@ -71,6 +80,8 @@ typedef struct pm_stats {
     unsigned knn_passes;                /**< kNN passes, all estimates */
     uint32_t live[PM_KNN_STATS_PASSES]; /**< live queries after kNN pass i (summed) */
     unsigned samples;
+    float radius;         /**< progressive: the radius of the last sample's search */
+    float radius0;        /**< progressive: the first sample's */
     unsigned pass_images; /**< intermediate images handed to pm_options.pass_image */
     double pass_images_s; /**< their cost, left out of the phases above */
 } pm_stats;

@@ -28,13 +28,18 @@ __kernel void pm_gather_queries(SLUICE_PARAMS, global const rt_gather *g, global
 /* Adds gather point i's estimate to its pixel (the weight already holds the
  * path throughput times albedo / pi). Points from `answered` on have no
  * current result (an intermediate image of a batched search) and add
- * nothing. */
+ * nothing. The area is pi r^2 of the photons found, or pi fixed_r2 when that
+ * is not 0 (progressive photon mapping's radius search: the disc searched,
+ * not the photons' extent, Knaus and Zwicker 2011). */
 __kernel void pm_gather_add(SLUICE_PARAMS, global const rt_gather *g,
-                            global const pm_knn_result *res, global long *accum, uint answered)
+                            global const pm_knn_result *res, global long *accum, uint answered,
+                            float fixed_r2)
 {
     SLUICE_FOR_EACH (i) {
         rt_gather p = g[i];
         pm_knn_result r = res[i];
+        if (fixed_r2 > 0.0f)
+            r.r2 = fixed_r2;
         int some = i < answered && r.count > 0u && r.r2 > 0.0f;
         SLUICE_COUNT(0, some);
         SLUICE_COUNT(1, !some);
