@@ -229,7 +229,7 @@ builds_and_runs() {
 loads_from() {
     command -v ldd >/dev/null 2>&1 || return 0
     lib=$(ldd "$1" | awk '/libsluice/ { print $3 }')
-    [ -n "$lib" ] && [ -e "$lib" ] || fail "$1 finds no libsluice: $(ldd "$1" | grep libsluice)"
+    { [ -n "$lib" ] && [ -e "$lib" ]; } || fail "$1 finds no libsluice: $(ldd "$1" | grep libsluice)"
     [ "$(cd "$(dirname "$lib")" && pwd -P)" = "$(cd "$2" && pwd -P)" ] ||
         fail "$1 loads libsluice from $lib, not from $2"
 }
@@ -249,14 +249,25 @@ runs_installed() {
 }
 mkdir -p "$TMP/elsewhere"
 
+# pkg_flags PCDIR SYSROOT: what pkg-config says of the sluice.pc in PCDIR
+# (with PKG_CONFIG_SYSROOT_DIR=SYSROOT, none when empty), into $TMP/cflags
+# and $TMP/libs.
+pkg_flags() {
+    (
+        export PKG_CONFIG_PATH="$1${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH}"
+        if [ -n "$2" ]; then
+            export PKG_CONFIG_SYSROOT_DIR="$2"
+        else
+            unset PKG_CONFIG_SYSROOT_DIR
+        fi
+        pkg-config --cflags sluice >"$TMP/cflags" && pkg-config --libs sluice >"$TMP/libs"
+    ) || fail "pkg-config on $1/sluice.pc"
+}
+
 # 4. The --destdir install: pkg-config on the staged files. The sysroot
 # prefixes every path of the .pc file with the staging directory (this also
 # works for multiarch libdirs, where --define-prefix guesses the prefix wrong).
-PKG_CONFIG_PATH="$STAGE/$LIBDIR_REL/pkgconfig${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH}" \
-    PKG_CONFIG_SYSROOT_DIR="$DEST" pkg-config --cflags sluice >"$TMP/cflags" &&
-    PKG_CONFIG_PATH="$STAGE/$LIBDIR_REL/pkgconfig${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH}" \
-        PKG_CONFIG_SYSROOT_DIR="$DEST" pkg-config --libs sluice >"$TMP/libs" ||
-    fail "pkg-config on the staged sluice.pc"
+pkg_flags "$STAGE/$LIBDIR_REL/pkgconfig" "$DEST"
 case "$(cat "$TMP/cflags")" in
 *"$DEST"*) ;;
 *) fail "pkg-config --cflags does not point into the staging directory: $(cat "$TMP/cflags")" ;;
@@ -270,13 +281,10 @@ runs_installed destdir "kernel    $STAGE/$DATADIR/sluice/examples/split_sign.cl"
 PFX=$TMP/prefix
 mv "$STAGE" "$PFX" || fail "moving $STAGE to $PFX"
 PC=$PFX/$LIBDIR_REL/pkgconfig/sluice.pc
-sed "s|^prefix=.*|prefix=$PFX|" "$PC" >"$TMP/sluice.pc" && cat "$TMP/sluice.pc" >"$PC" ||
+{ sed "s|^prefix=.*|prefix=$PFX|" "$PC" >"$TMP/sluice.pc" && cat "$TMP/sluice.pc" >"$PC"; } ||
     fail "setting the prefix of $PC"
 grep -q "^prefix=$PFX\$" "$PC" || fail "$PC has no prefix= line to set"
-PKG_CONFIG_PATH="$PFX/$LIBDIR_REL/pkgconfig${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH}" \
-    pkg-config --cflags sluice >"$TMP/cflags" &&
-    PKG_CONFIG_PATH="$PFX/$LIBDIR_REL/pkgconfig${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH}" \
-        pkg-config --libs sluice >"$TMP/libs" || fail "pkg-config on $PC"
+pkg_flags "$PFX/$LIBDIR_REL/pkgconfig" ""
 builds_and_runs prefix "$(cat "$TMP/cflags")" "$(cat "$TMP/libs")" "$PFX/$LIBDIR_REL"
 loads_from "$PFX/$BINDIR/sluice-example-bounce" "$PFX/$LIBDIR_REL"
 loads_from "$PFX/$BINDIR/sluice-raytrace" "$PFX/$LIBDIR_REL"

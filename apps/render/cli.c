@@ -162,7 +162,9 @@ int sr_cli_common_finish(const char *prog, const sr_cli_common *c)
 
 void sr_cli_common_usage(FILE *out)
 {
-    fputs("  --scene NAME|FILE        built-in scene or scene/mesh file (default cornell)\n"
+    fputs("  --scene NAME|FILE        built-in scene or scene/mesh file (default cornell); a\n"
+          "                           bare file name not found here is looked up among the\n"
+          "                           installed scenes (<datadir>/sluice/scenes)\n"
           "  --size WxH               image size (default: the scene camera's)\n"
           "  --seed N                 random seed (default 1); same seed, same image\n"
           "  --out FILE               image: .png (sRGB, 8-bit), .exr or .hdr (linear float)\n"
