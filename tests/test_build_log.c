@@ -152,6 +152,9 @@ static void check_cases(void)
     d = sl_build_log_digest("my.cl:1:1: error: x\n  x;\n  ^\n", "my.cl", false, &more);
     CHECK(more, "source excerpts are more");
     free(d);
+    CHECK(sl_build_log_is_count("2 warnings generated.\n", 22), "a count");
+    CHECK(sl_build_log_is_count("1 warning and 1 error generated.", 32), "a count of both");
+    CHECK(!sl_build_log_is_count("2 kernels generated.\nan error", 20), "no count past the line");
 }
 
 int main(int argc, char **argv)

@@ -140,12 +140,30 @@ static bool is_placeholder(const char *f, size_t len)
     return digits == len;
 }
 
+/* Does s[0..len) contain `word`? (s need not end there.) */
+static bool contains(const char *s, size_t len, const char *word)
+{
+    size_t wl = strlen(word);
+    for (size_t i = 0; i + wl <= len; ++i)
+        if (memcmp(s + i, word, wl) == 0)
+            return true;
+    return false;
+}
+
+bool sl_build_log_is_count(const char *line, size_t len)
+{
+    static const char tail[] = " generated.";
+    const size_t tl = sizeof tail - 1;
+    while (len && (line[len - 1] == '\n' || line[len - 1] == '\r'))
+        --len;
+    return len > tl && isdigit((unsigned char)line[0]) && memcmp(line + len - tl, tail, tl) == 0 &&
+           (contains(line, len, " warning") || contains(line, len, " error"));
+}
+
 /* The compilers' closing lines, which say nothing the diagnostics do not. */
 static bool is_chatter(const char *s, size_t len)
 {
-    static const char gen[] = " generated.";
-    if (len > sizeof gen - 1 && memcmp(s + len - (sizeof gen - 1), gen, sizeof gen - 1) == 0 &&
-        isdigit((unsigned char)s[0]))
+    if (sl_build_log_is_count(s, len))
         return true;
     if (starts_with(s, len, "Device ")) {
         static const char tail[] = "failed to build the program";

@@ -5,6 +5,7 @@
 #define SLUICE_BUILD_LOG_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 /* Rewrites a compiler's build log into diagnostic lines of one shape,
  *
@@ -33,5 +34,10 @@
  * Returns a malloc'd string ("" when the log has no error, nor a warning
  * asked for), or NULL when out of memory. */
 char *sl_build_log_digest(const char *log, const char *name, bool with_warnings, bool *more);
+
+/* Is this clang's count of diagnostics, "2 warnings generated." or "1
+ * warning and 1 error generated." (a trailing newline allowed)? PoCL's
+ * compiler writes it on stderr, others at the end of their log. */
+bool sl_build_log_is_count(const char *line, size_t len);
 
 #endif /* SLUICE_BUILD_LOG_H */

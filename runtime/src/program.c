@@ -3,7 +3,6 @@
 
 #include "build_log.h"
 
-#include <ctype.h>
 #include <errno.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -164,19 +163,6 @@ void sluice_program_destroy(sluice_program *p)
     free(p);
 }
 
-/* Is this the line clang prints on stderr after compiling a source with
- * diagnostics ("2 warnings generated.", "1 warning and 1 error generated.")?
- * PoCL sends the diagnostics themselves to the build log, not this count. */
-static bool is_compiler_summary(const char *line, size_t len)
-{
-    static const char tail[] = " generated.";
-    const size_t tl = sizeof tail - 1;
-    while (len && (line[len - 1] == '\n' || line[len - 1] == '\r'))
-        --len;
-    return len > tl && isdigit((unsigned char)line[0]) && memcmp(line + len - tl, tail, tl) == 0 &&
-           (strstr(line, " warning") != NULL || strstr(line, " error") != NULL);
-}
-
 /* Standard error (file descriptor 2) sent to a temporary file while the
  * compiler runs: clang writes its summary line there itself. File descriptor
  * 2 belongs to the whole process, so captures are serialised by the
@@ -227,7 +213,7 @@ static void capture_end(stderr_capture *c, bool everything)
     size_t cap = 0;
     ssize_t len;
     while ((len = getline(&line, &cap, c->file)) > 0)
-        if (everything || !is_compiler_summary(line, (size_t)len))
+        if (everything || !sl_build_log_is_count(line, (size_t)len))
             fwrite(line, 1, (size_t)len, stderr);
     free(line);
     fclose(c->file);
