@@ -1,7 +1,19 @@
 #!/bin/sh
-# Installs the built library into a temporary staging directory, then builds
-# a small Sluice program outside the source tree against the installed
-# headers, library and pkg-config file only, runs it and checks its output.
+# Installs the built tree and uses it as a user would, with no
+# LD_LIBRARY_PATH anywhere:
+#  - a --destdir install (staged under $TMP/dest): a small Sluice program is
+#    built outside the source tree against the staged headers, library and
+#    pkg-config file (PKG_CONFIG_SYSROOT_DIR), and run; the installed example
+#    sluice-example-split-sign runs from another folder and must take its
+#    kernel from the staged data folder, not from the source tree;
+#  - a --prefix install: the staged tree moved to $TMP/prefix with the
+#    prefix of its sluice.pc set to match, which is file for file what
+#    `meson setup --prefix=$TMP/prefix` would install, without a second
+#    configure and build of the whole project. The installed programs were
+#    linked for the build's prefix, so that they run there proves that their
+#    $ORIGIN rpath and data lookup are relative. The program is built again
+#    with plain pkg-config, sluice-example-bounce and sluice-raytrace run
+#    (the latter on the installed scene example.json, by its bare name).
 # The program loads its kernel from a file, splits a stream into two
 # conditional outputs (one ordered, one unordered) and runs a multipass loop
 # stopped by a counter.
@@ -22,31 +34,48 @@ CC=${CC:-cc}
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/sluice-install.XXXXXX")
 trap 'rm -rf "$TMP"' EXIT INT TERM
 DEST=$TMP/dest
+# Nothing here may lean on LD_LIBRARY_PATH: installed programs find
+# libsluice through their rpath, the test's program through -Wl,-rpath.
+unset LD_LIBRARY_PATH
+
+# The build's install layout and whether it is sanitized (make asan): a
+# sanitized library needs the sanitizer runtime in the program too.
+LAYOUT=$(meson introspect "$BUILD" --buildoptions | python3 -c '
+import json, sys
+o = {x["name"]: x["value"] for x in json.load(sys.stdin)}
+print(o["prefix"], o["bindir"], o["libdir"], o["datadir"], o.get("b_sanitize", "none") or "none")
+') || fail "meson introspect $BUILD"
+# shellcheck disable=SC2086 # five words
+set -- $LAYOUT
+PREFIX=$1 BINDIR=$2 LIBDIR_REL=$3 DATADIR=$4 SANITIZE=$5
+case "$PREFIX$BINDIR$LIBDIR_REL$DATADIR" in
+*" "*) fail "install paths with spaces are not supported by this test" ;;
+esac
+for d in "$BINDIR" "$LIBDIR_REL" "$DATADIR"; do
+    case "$d" in
+    /*) fail "bindir, libdir and datadir must be relative to the prefix for this test ($d)" ;;
+    esac
+done
+EXTRA=
+[ "$SANITIZE" = none ] || EXTRA="-fsanitize=$SANITIZE"
 
 # 1. Install into the staging directory (no rebuild: ninja already ran).
 meson install -C "$BUILD" --no-rebuild --quiet --destdir "$DEST" >"$TMP/install.log" 2>&1 ||
     { cat "$TMP/install.log" >&2; fail "meson install"; }
+STAGE=$DEST$PREFIX
 
-PC=$(find "$DEST" -name sluice.pc | head -n 1)
-[ -n "$PC" ] || fail "no sluice.pc installed under $DEST"
-for f in sluice.h streams.h sluice.cl; do
-    [ -n "$(find "$DEST" -path "*/include/sluice/$f")" ] || fail "header $f not installed"
+# 2. The layout: library, headers, pkg-config file, programs, data, docs.
+for f in "$LIBDIR_REL/libsluice.so" "$LIBDIR_REL/pkgconfig/sluice.pc" \
+    include/sluice/sluice.h include/sluice/streams.h include/sluice/sluice.cl \
+    "$BINDIR/sluice-raytrace" "$BINDIR/sluice-photonmap" "$BINDIR/sluice-info" \
+    "$BINDIR/sluice-scene" "$BINDIR/sluice-imgdiff" \
+    "$BINDIR/sluice-example-split-sign" "$BINDIR/sluice-example-bounce" \
+    "$DATADIR/sluice/examples/split_sign.cl" "$DATADIR/sluice/examples/bounce.cl" \
+    "$DATADIR/sluice/scenes/example.json" "$DATADIR/sluice/scenes/meshes/pyramid.obj" \
+    "$DATADIR/doc/sluice/install.md" "$DATADIR/doc/sluice/scenes.md"; do
+    [ -e "$STAGE/$f" ] || fail "$PREFIX/$f not installed (under $DEST)"
 done
-
-# 2. pkg-config on the staged files: the sysroot prefixes every path of the
-# .pc file with the staging directory (this also works for multiarch libdirs,
-# where --define-prefix guesses the prefix wrong).
-export PKG_CONFIG_PATH="$(dirname "$PC")${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH}"
-export PKG_CONFIG_SYSROOT_DIR="$DEST"
-CFLAGS=$(pkg-config --cflags sluice) || fail "pkg-config --cflags sluice"
-LIBS=$(pkg-config --libs sluice) || fail "pkg-config --libs sluice"
-LIBDIR=$(pkg-config --variable=libdir sluice) || fail "pkg-config --variable=libdir sluice"
-case "$LIBDIR" in
-"$DEST"/*) ;;
-*) LIBDIR=$DEST$LIBDIR ;; # older pkg-config does not prefix variables
-esac
-[ -e "$LIBDIR/libsluice.so" ] || fail "libsluice.so not in $LIBDIR"
-echo "pkg-config: $CFLAGS $LIBS"
+echo "layout: ok under $STAGE"
 
 # 3. A program and its kernel, outside the source tree.
 mkdir -p "$TMP/app"
@@ -176,30 +205,92 @@ int main(int argc, char **argv)
 }
 EOF
 
-# 4. Build with nothing but what pkg-config says, then run against the
-# staged library. A sanitized library (make asan) needs the sanitizer runtime
-# in the program too.
-SANITIZE=$(meson introspect "$BUILD" --buildoptions | python3 -c '
-import json, sys
-print(next((o["value"] for o in json.load(sys.stdin) if o["name"] == "b_sanitize"), "none"))
-') || fail "meson introspect $BUILD"
-EXTRA=
-if [ "$SANITIZE" != none ] && [ -n "$SANITIZE" ]; then
-    EXTRA="-fsanitize=$SANITIZE"
-fi
-# shellcheck disable=SC2086 # the flags are meant to be split
-(cd "$TMP/app" && "$CC" -std=c11 -Wall -Wextra -Werror $EXTRA -o prog prog.c $CFLAGS $LIBS) ||
-    fail "compiling against the installed Sluice"
-LD_LIBRARY_PATH="$LIBDIR${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-export LD_LIBRARY_PATH
-if command -v ldd >/dev/null 2>&1; then
-    ldd "$TMP/app/prog" | grep libsluice | grep -q "$DEST" ||
-        fail "prog does not load libsluice from the staging directory: $(ldd "$TMP/app/prog" | grep libsluice)"
-fi
-OUTPUT=$("$TMP/app/prog" "$TMP/app/thirds.cl") || fail "prog exited with $?: $OUTPUT"
-echo "$OUTPUT"
-case "$OUTPUT" in
-*install-test-ok*) ;;
-*) fail "unexpected output" ;;
+
+# builds_and_runs LABEL CFLAGS LIBS LIBDIR: compiles prog.c with nothing but
+# what pkg-config said (and an rpath to LIBDIR, as a user of a non-system
+# prefix would), checks that it loads libsluice from LIBDIR and runs it.
+builds_and_runs() {
+    label=$1 cflags=$2 libs=$3 libdir=$4
+    echo "$label: pkg-config: $cflags $libs"
+    [ -e "$libdir/libsluice.so" ] || fail "$label: libsluice.so not in $libdir"
+    # shellcheck disable=SC2086 # the flags are meant to be split
+    (cd "$TMP/app" && "$CC" -std=c11 -Wall -Wextra -Werror $EXTRA -o prog prog.c $cflags $libs \
+        "-Wl,-rpath,$libdir") || fail "$label: compiling against the installed Sluice"
+    loads_from "$TMP/app/prog" "$libdir"
+    out=$("$TMP/app/prog" "$TMP/app/thirds.cl") || fail "$label: prog exited with $?: $out"
+    echo "$label: $out"
+    case "$out" in
+    *install-test-ok*) ;;
+    *) fail "$label: unexpected output" ;;
+    esac
+}
+
+# loads_from EXE DIR: EXE's libsluice resolves to DIR (when ldd exists).
+loads_from() {
+    command -v ldd >/dev/null 2>&1 || return 0
+    lib=$(ldd "$1" | awk '/libsluice/ { print $3 }')
+    { [ -n "$lib" ] && [ -e "$lib" ]; } || fail "$1 finds no libsluice: $(ldd "$1" | grep libsluice)"
+    [ "$(cd "$(dirname "$lib")" && pwd -P)" = "$(cd "$2" && pwd -P)" ] ||
+        fail "$1 loads libsluice from $lib, not from $2"
+}
+
+# runs_installed LABEL EXPECT EXE ARGS...: runs an installed program from a
+# folder with nothing in it (not the source or build tree) and checks that
+# its output contains EXPECT.
+runs_installed() {
+    label=$1 expect=$2
+    shift 2
+    out=$(cd "$TMP/elsewhere" && "$@" 2>&1) || fail "$label: $* exited with $?: $out"
+    case "$out" in
+    *"$expect"*) ;;
+    *) fail "$label: $* did not print [$expect]: $out" ;;
+    esac
+    echo "$label: $(basename "$1") ok"
+}
+mkdir -p "$TMP/elsewhere"
+
+# pkg_flags PCDIR SYSROOT: what pkg-config says of the sluice.pc in PCDIR
+# (with PKG_CONFIG_SYSROOT_DIR=SYSROOT, none when empty), into $TMP/cflags
+# and $TMP/libs.
+pkg_flags() {
+    (
+        export PKG_CONFIG_PATH="$1${PKG_CONFIG_PATH:+:$PKG_CONFIG_PATH}"
+        if [ -n "$2" ]; then
+            export PKG_CONFIG_SYSROOT_DIR="$2"
+        else
+            unset PKG_CONFIG_SYSROOT_DIR
+        fi
+        pkg-config --cflags sluice >"$TMP/cflags" && pkg-config --libs sluice >"$TMP/libs"
+    ) || fail "pkg-config on $1/sluice.pc"
+}
+
+# 4. The --destdir install: pkg-config on the staged files. The sysroot
+# prefixes every path of the .pc file with the staging directory (this also
+# works for multiarch libdirs, where --define-prefix guesses the prefix wrong).
+pkg_flags "$STAGE/$LIBDIR_REL/pkgconfig" "$DEST"
+case "$(cat "$TMP/cflags")" in
+*"$DEST"*) ;;
+*) fail "pkg-config --cflags does not point into the staging directory: $(cat "$TMP/cflags")" ;;
 esac
+builds_and_runs destdir "$(cat "$TMP/cflags")" "$(cat "$TMP/libs")" "$STAGE/$LIBDIR_REL"
+loads_from "$STAGE/$BINDIR/sluice-example-split-sign" "$STAGE/$LIBDIR_REL"
+runs_installed destdir "kernel    $STAGE/$DATADIR/sluice/examples/split_sign.cl" \
+    "$STAGE/$BINDIR/sluice-example-split-sign" --count 20000 --repeat 1
+
+# 5. The --prefix install (see the top): the same tree at $TMP/prefix.
+PFX=$TMP/prefix
+mv "$STAGE" "$PFX" || fail "moving $STAGE to $PFX"
+PC=$PFX/$LIBDIR_REL/pkgconfig/sluice.pc
+{ sed "s|^prefix=.*|prefix=$PFX|" "$PC" >"$TMP/sluice.pc" && cat "$TMP/sluice.pc" >"$PC"; } ||
+    fail "setting the prefix of $PC"
+grep -q "^prefix=$PFX\$" "$PC" || fail "$PC has no prefix= line to set"
+pkg_flags "$PFX/$LIBDIR_REL/pkgconfig" ""
+builds_and_runs prefix "$(cat "$TMP/cflags")" "$(cat "$TMP/libs")" "$PFX/$LIBDIR_REL"
+loads_from "$PFX/$BINDIR/sluice-example-bounce" "$PFX/$LIBDIR_REL"
+loads_from "$PFX/$BINDIR/sluice-raytrace" "$PFX/$LIBDIR_REL"
+runs_installed prefix "kernel $PFX/$DATADIR/sluice/examples/bounce.cl" \
+    "$PFX/$BINDIR/sluice-example-bounce" --count 2000 --every 0
+runs_installed prefix "rays: eye 1024" "$PFX/$BINDIR/sluice-raytrace" --scene example.json \
+    --size 32x32 --spp 1 --out "$TMP/elsewhere/example.png"
+[ -s "$TMP/elsewhere/example.png" ] || fail "sluice-raytrace wrote no image"
 echo "test_install: ok"

@@ -743,6 +743,36 @@ static void test_errors(sluice_context *ctx)
     CHECK(strstr(sluice_program_build_log(p), "broken.cl:4:") != NULL, "log names line 4: %s",
           sluice_program_build_log(p));
     CHECK(strstr(sluice_context_error(ctx), "broken.cl:4:") != NULL, "error names line 4");
+    /* Whatever the vendor's log looks like, the message leads with the error
+     * as `file:line:col: error: message` (runtime/src/build_log.h). */
+    const char *lead = "broken.cl:4:31: error: use of undeclared identifier 'undefined_thing'\n";
+    CHECK(strncmp(sluice_context_error(ctx), lead, strlen(lead)) == 0,
+          "the message leads with the error: [%s]", sluice_context_error(ctx));
+    sluice_program_destroy(p);
+
+    /* Two errors after a warning: the errors lead, first error first, and
+     * the warning is left out of them (the context is not verbose). */
+    const char *two_src = "#include \"sluice.cl\"\n"
+                          "#warning sluice test warning\n"
+                          "__kernel void broken(SLUICE_PARAMS, global uint *x)\n"
+                          "{\n"
+                          "    SLUICE_FOR_EACH(i) x[i] = first_missing;\n"
+                          "    x[0] = second_missing;\n"
+                          "}\n";
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "two.cl", two_src, NULL, &p));
+    CHECK(sluice_program_build(p) == SLUICE_ERROR_BUILD, "two errors give a build error");
+    const char *two = sluice_context_error(ctx);
+    const char *second = strchr(two, '\n');
+    CHECK(second && strncmp(two, "two.cl:5:", 9) == 0 && strstr(two, ": error: ") < second &&
+              strstr(two, "first_missing") < second,
+          "first line is the first error: [%s]", two);
+    CHECK(second && strncmp(second + 1, "two.cl:6:", 9) == 0 && strstr(second, "second_missing"),
+          "second line is the second error: [%s]", two);
+    const char *third = second ? strchr(second + 1, '\n') : NULL;
+    CHECK(third && strncmp(third + 1, "building two.cl failed", 22) == 0,
+          "then the note on the build, no warning: [%s]", two);
+    CHECK(strstr(sluice_program_build_log(p), "sluice test warning") != NULL,
+          "the build log keeps the warning: [%s]", sluice_program_build_log(p));
     sluice_program_destroy(p);
 
     CHECK(sluice_program_create_file(ctx, "/nonexistent/k.cl", NULL, &p) == SLUICE_ERROR_IO,

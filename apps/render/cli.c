@@ -1,6 +1,8 @@
 /* See cli.h. */
 #include "cli.h"
 
+#include "data_path.h"
+
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -9,6 +11,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
+
+/* The source tree's scenes/, recorded at build time (apps/render/meson.build). */
+#ifndef SR_SCENES_SOURCE_DIR
+#define SR_SCENES_SOURCE_DIR ""
+#endif
 
 void sr_cli_common_init(sr_cli_common *c)
 {
@@ -154,7 +162,9 @@ int sr_cli_common_finish(const char *prog, const sr_cli_common *c)
 
 void sr_cli_common_usage(FILE *out)
 {
-    fputs("  --scene NAME|FILE        built-in scene or scene/mesh file (default cornell)\n"
+    fputs("  --scene NAME|FILE        built-in scene or scene/mesh file (default cornell); a\n"
+          "                           bare file name not found here is looked up among the\n"
+          "                           installed scenes (<datadir>/sluice/scenes)\n"
           "  --size WxH               image size (default: the scene camera's)\n"
           "  --seed N                 random seed (default 1); same seed, same image\n"
           "  --out FILE               image: .png (sRGB, 8-bit), .exr or .hdr (linear float)\n"
@@ -173,12 +183,26 @@ void sr_cli_common_usage(FILE *out)
 
 int sr_cli_load_scene(const char *prog, const sr_cli_common *c, sr_scene **out)
 {
-    char err[1024] = "";
+    char err[1024] = "", found[4096], tried[8192] = "";
+    const char *path = c->scene;
+    /* A bare file name that is neither a built-in scene nor a file here is
+     * looked up among the installed scenes (<datadir>/sluice/scenes, found
+     * relative to the program), then in the source tree's scenes/, so that
+     * `--scene example.json` works from any folder. Paths inside the scene
+     * (its meshes) resolve against the file found, as for any scene file. */
+    if (!sr_scene_is_builtin(path) && !strchr(path, '/') && access(path, F_OK) != 0 &&
+        sr_find_data_file("scenes", path, 0, SR_SCENES_SOURCE_DIR, found, sizeof found, tried,
+                          sizeof tried) == 0)
+        path = found;
     sr_scene_load_options lo;
     memset(&lo, 0, sizeof lo);
     lo.flags = SR_SCENE_DEFAULT_LIGHT;
-    if (sr_scene_load(c->scene, &lo, out, err, sizeof err) != SLUICE_OK) {
-        fprintf(stderr, "%s: --scene %s: %s\n", prog, c->scene, err);
+    if (sr_scene_load(path, &lo, out, err, sizeof err) != SLUICE_OK) {
+        if (path != found && tried[0])
+            fprintf(stderr, "%s: --scene %s: %s (not found as %s either)\n", prog, c->scene, err,
+                    tried);
+        else
+            fprintf(stderr, "%s: --scene %s: %s\n", prog, c->scene, err);
         return 1;
     }
     return 0;

@@ -48,7 +48,10 @@ int sr_cli_common_finish(const char *prog, const sr_cli_common *c);
 int sr_cli_image_path(const char *prog, const char *opt, const char *path);
 
 /** Loads c->scene (a built-in name or a file; a default light is added to a
- *  scene without one). 0 on success, else 1 after printing
+ *  scene without one). A bare file name that does not exist in the current
+ *  folder is also looked up in the installed scenes folder
+ *  (<datadir>/sluice/scenes, relative to the program) and then in the source
+ *  tree's scenes/. 0 on success, else 1 after printing
  *  "PROG: --scene NAME: why". */
 int sr_cli_load_scene(const char *prog, const sr_cli_common *c, sr_scene **out);
 

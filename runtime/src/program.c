@@ -1,7 +1,8 @@
 /* Programs: OpenCL C source built lazily, once. */
 #include "internal.h"
 
-#include <ctype.h>
+#include "build_log.h"
+
 #include <errno.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -162,19 +163,6 @@ void sluice_program_destroy(sluice_program *p)
     free(p);
 }
 
-/* Is this the line clang prints on stderr after compiling a source with
- * diagnostics ("2 warnings generated.", "1 warning and 1 error generated.")?
- * PoCL sends the diagnostics themselves to the build log, not this count. */
-static bool is_compiler_summary(const char *line, size_t len)
-{
-    static const char tail[] = " generated.";
-    const size_t tl = sizeof tail - 1;
-    while (len && (line[len - 1] == '\n' || line[len - 1] == '\r'))
-        --len;
-    return len > tl && isdigit((unsigned char)line[0]) && memcmp(line + len - tl, tail, tl) == 0 &&
-           (strstr(line, " warning") != NULL || strstr(line, " error") != NULL);
-}
-
 /* Standard error (file descriptor 2) sent to a temporary file while the
  * compiler runs: clang writes its summary line there itself. File descriptor
  * 2 belongs to the whole process, so captures are serialised by the
@@ -225,12 +213,40 @@ static void capture_end(stderr_capture *c, bool everything)
     size_t cap = 0;
     ssize_t len;
     while ((len = getline(&line, &cap, c->file)) > 0)
-        if (everything || !is_compiler_summary(line, (size_t)len))
+        if (everything || !sl_build_log_is_count(line, (size_t)len))
             fwrite(line, 1, (size_t)len, stderr);
     free(line);
     fclose(c->file);
     c->file = NULL;
     pthread_mutex_unlock(&capture_lock);
+}
+
+/* The message of a failed build. Each vendor words its log its own way, so
+ * the message leads with the errors in one shape, `file:line:col: error:
+ * message`, the first error first (build_log.h; warnings too when verbose),
+ * for editors and for people reading the first line. The raw log follows
+ * when it holds more than that (source excerpts, carets, notes) or when
+ * verbose; it stays in sluice_program_build_log() in any case. */
+static sluice_status build_failure(sluice_program *p)
+{
+    sluice_context *ctx = p->ctx;
+    const char *log = p->log && p->log[0] ? p->log : "(no log)\n";
+    size_t n = strlen(log);
+    const char *nl = log[n - 1] == '\n' ? "" : "\n";
+    bool more = false;
+    char *digest = sl_build_log_digest(log, p->name, ctx->verbose != 0, &more);
+    sluice_status st;
+    if (!digest || !digest[0])
+        st = sl_fail(ctx, SLUICE_ERROR_BUILD, "building %s failed:\n%s%s", p->name, log, nl);
+    else if (more || ctx->verbose)
+        st = sl_fail(ctx, SLUICE_ERROR_BUILD, "%sbuilding %s failed; the compiler's log:\n%s%s",
+                     digest, p->name, log, nl);
+    else
+        st = sl_fail(ctx, SLUICE_ERROR_BUILD,
+                     "%sbuilding %s failed (the compiler's log: sluice_program_build_log())\n",
+                     digest, p->name);
+    free(digest);
+    return st;
 }
 
 sluice_status sluice_program_build(sluice_program *p)
@@ -276,8 +292,7 @@ sluice_status sluice_program_build(sluice_program *p)
     if (err != CL_SUCCESS) {
         clReleaseProgram(prog);
         if (err == CL_BUILD_PROGRAM_FAILURE || err == CL_INVALID_BUILD_OPTIONS)
-            return sl_fail(ctx, SLUICE_ERROR_BUILD, "building %s failed:\n%s", p->name,
-                           p->log ? p->log : "(no log)");
+            return build_failure(p);
         return sl_cl_fail(ctx, err, "clBuildProgram");
     }
     p->cl = prog;

@@ -10,10 +10,13 @@
  * compared pass by pass and particle by particle; the integer arithmetic makes
  * the comparison exact.
  *
- * The kernel is loaded at run time from the source directory recorded at
- * build time (EXAMPLE_KERNEL_DIR), or from the path given with --kernel.
+ * The kernel is loaded at run time from the path given with --kernel, else
+ * found by find_kernel() below (next to the program, in the installed data
+ * folder, or in the source tree).
  */
 #include <sluice/sluice.h>
+
+#include "data_path.h"
 
 #include <errno.h>
 #include <stdint.h>
@@ -90,8 +93,9 @@ typedef struct options {
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: bounce [--count N] [--seed S] [--steps K] [--max-passes P] [--every E]\n"
-            "              [--kernel PATH] [--device NAME] [--profile] [--help]\n"
+            "usage: sluice-example-bounce [--count N] [--seed S] [--steps K] [--max-passes P]\n"
+            "                             [--every E] [--kernel PATH] [--device NAME] [--profile]\n"
+            "                             [--help]\n"
             "Bounces N particles in a box with a hole in the floor, K steps per pass of a\n"
             "Sluice multipass loop, until every particle has escaped or come to rest;\n"
             "then checks every pass against plain C.\n"
@@ -101,11 +105,11 @@ static void usage(FILE *f)
             "  --max-passes P  give up after P passes (default 10000)\n"
             "  --every E       print the statistics of every E-th pass (default 10;\n"
             "                  0: only the summary)\n"
-            "  --kernel PATH   the kernel file (default %s/bounce.cl)\n"
+            "  --kernel PATH   the kernel file (default: bounce.cl next to the program,\n"
+            "                  else in <datadir>/sluice/examples, else in the source tree)\n"
             "  --device NAME   OpenCL device whose \"platform / name\" contains NAME\n"
             "                  (default: SLUICE_DEVICE, else the first CPU device)\n"
-            "  --profile       print the per-kernel profiling table\n",
-            EXAMPLE_KERNEL_DIR);
+            "  --profile       print the per-kernel profiling table\n");
 }
 
 static int parse_number(const char *s, unsigned long long max, unsigned long long *out)
@@ -124,14 +128,12 @@ static int parse_number(const char *s, unsigned long long max, unsigned long lon
 /* Returns 0 on success, 2 on a usage error (message printed), 1 for --help. */
 static int parse_args(int argc, char **argv, options *o)
 {
-    static char default_kernel[4096];
-    snprintf(default_kernel, sizeof default_kernel, "%s/bounce.cl", EXAMPLE_KERNEL_DIR);
     o->count = 100000;
     o->seed = 1;
     o->steps = 4;
     o->max_passes = 10000;
     o->every = 10;
-    o->kernel = default_kernel;
+    o->kernel = NULL; /* find_kernel() */
     o->device = NULL;
     o->profile = 0;
     for (int i = 1; i < argc; ++i) {
@@ -301,6 +303,24 @@ static int compare_ids(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* The kernel file when --kernel is not given: next to the program (a
+ * copy of the example with its kernel beside it), else in the installed data
+ * folder <datadir>/sluice/examples (found relative to the program, so that a
+ * moved install or one staged with --destdir finds its own copy), else in
+ * the source tree (EXAMPLE_KERNEL_DIR, recorded at build time). */
+static int find_kernel(char *path, size_t size)
+{
+    char tried[8192];
+    if (sr_find_data_file("examples", "bounce.cl", 1, EXAMPLE_KERNEL_DIR, path, size, tried,
+                          sizeof tried) == 0)
+        return 0;
+    fprintf(
+        stderr,
+        "bounce: cannot find the kernel bounce.cl; tried %s (give its path with --kernel PATH)\n",
+        tried);
+    return -1;
+}
+
 #define TRY(call)                                                                                  \
     do {                                                                                           \
         sluice_status st_ = (call);                                                                \
@@ -317,6 +337,12 @@ int main(int argc, char **argv)
     int parsed = parse_args(argc, argv, &opt);
     if (parsed)
         return parsed == 1 ? 0 : 2;
+    char kernel_path[4096];
+    if (!opt.kernel) {
+        if (find_kernel(kernel_path, sizeof kernel_path) != 0)
+            return 1;
+        opt.kernel = kernel_path;
+    }
 
     const size_t n = opt.count;
     int rc = 1;
@@ -404,6 +430,7 @@ int main(int argc, char **argv)
 
     /* Per-pass statistics, kept by the loop. */
     printf("bounce: %zu particles, %d steps per pass, on %s\n", n, opt.steps, info.name);
+    printf("  kernel %s\n", opt.kernel);
     if (opt.every)
         printf("  %6s %10s %10s %10s %9s\n", "pass", "live", "escaped", "stopped", "ms");
     uint64_t moved = n; /* particle-passes: the records all launches read */

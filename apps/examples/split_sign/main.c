@@ -8,10 +8,12 @@
  * a short summary with the throughput.
  *
  * The kernel lives in split_sign.cl, loaded from disk at run time: from the
- * source directory recorded at build time (EXAMPLE_KERNEL_DIR), or from the
- * path given with --kernel.
+ * path given with --kernel, else found by find_kernel() below (next to the
+ * program, in the installed data folder, or in the source tree).
  */
 #include <sluice/sluice.h>
+
+#include "data_path.h"
 
 #include <errno.h>
 #include <math.h>
@@ -49,19 +51,19 @@ typedef struct options {
 
 static void usage(FILE *f)
 {
-    fprintf(f,
-            "usage: split_sign [--count N] [--seed S] [--repeat R] [--kernel PATH]\n"
-            "                  [--device NAME] [--profile] [--help]\n"
-            "Splits N random floats into three streams (negative, small, large) with one\n"
-            "Sluice kernel, checks the result against plain C and prints the throughput.\n"
-            "  --count N      number of floats (default 1000000)\n"
-            "  --seed S       seed of the random numbers (default 1)\n"
-            "  --repeat R     launches to time; the best one is reported (default 3)\n"
-            "  --kernel PATH  the kernel file (default %s/split_sign.cl)\n"
-            "  --device NAME  OpenCL device whose \"platform / name\" contains NAME\n"
-            "                 (default: SLUICE_DEVICE, else the first CPU device)\n"
-            "  --profile      print the per-kernel profiling table\n",
-            EXAMPLE_KERNEL_DIR);
+    fprintf(f, "usage: sluice-example-split-sign [--count N] [--seed S] [--repeat R]\n"
+               "                                 [--kernel PATH] [--device NAME] [--profile]\n"
+               "                                 [--help]\n"
+               "Splits N random floats into three streams (negative, small, large) with one\n"
+               "Sluice kernel, checks the result against plain C and prints the throughput.\n"
+               "  --count N      number of floats (default 1000000)\n"
+               "  --seed S       seed of the random numbers (default 1)\n"
+               "  --repeat R     launches to time; the best one is reported (default 3)\n"
+               "  --kernel PATH  the kernel file (default: split_sign.cl next to the program,\n"
+               "                 else in <datadir>/sluice/examples, else in the source tree)\n"
+               "  --device NAME  OpenCL device whose \"platform / name\" contains NAME\n"
+               "                 (default: SLUICE_DEVICE, else the first CPU device)\n"
+               "  --profile      print the per-kernel profiling table\n");
 }
 
 /* Parses a non-negative decimal integer no larger than `max`. */
@@ -81,12 +83,10 @@ static int parse_size(const char *s, unsigned long long max, unsigned long long 
 /* Returns 0 on success, 2 on a usage error (message printed), 1 for --help. */
 static int parse_args(int argc, char **argv, options *o)
 {
-    static char default_kernel[4096];
-    snprintf(default_kernel, sizeof default_kernel, "%s/split_sign.cl", EXAMPLE_KERNEL_DIR);
     o->count = 1000000;
     o->seed = 1;
     o->repeat = 3;
-    o->kernel = default_kernel;
+    o->kernel = NULL; /* find_kernel() */
     o->device = NULL;
     o->profile = 0;
     for (int i = 1; i < argc; ++i) {
@@ -164,6 +164,24 @@ static int compare_floats(const void *a, const void *b)
 
 /* Reports a failed Sluice call with the context's message and jumps to the
  * clean-up code. Every Sluice call returns a status; SLUICE_OK is 0. */
+/* The kernel file when --kernel is not given: next to the program (a
+ * copy of the example with its kernel beside it), else in the installed data
+ * folder <datadir>/sluice/examples (found relative to the program, so that a
+ * moved install or one staged with --destdir finds its own copy), else in
+ * the source tree (EXAMPLE_KERNEL_DIR, recorded at build time). */
+static int find_kernel(char *path, size_t size)
+{
+    char tried[8192];
+    if (sr_find_data_file("examples", "split_sign.cl", 1, EXAMPLE_KERNEL_DIR, path, size, tried,
+                          sizeof tried) == 0)
+        return 0;
+    fprintf(stderr,
+            "split_sign: cannot find the kernel split_sign.cl; tried %s (give its path with "
+            "--kernel PATH)\n",
+            tried);
+    return -1;
+}
+
 #define TRY(call)                                                                                  \
     do {                                                                                           \
         sluice_status st_ = (call);                                                                \
@@ -180,6 +198,12 @@ int main(int argc, char **argv)
     int parsed = parse_args(argc, argv, &opt);
     if (parsed)
         return parsed == 1 ? 0 : 2;
+    char kernel_path[4096];
+    if (!opt.kernel) {
+        if (find_kernel(kernel_path, sizeof kernel_path) != 0)
+            return 1;
+        opt.kernel = kernel_path;
+    }
 
     const size_t n = opt.count;
     int rc = 1;
@@ -308,6 +332,7 @@ int main(int argc, char **argv)
     size_t emitted = got_len[0] + got_len[1] + got_len[2];
     double bytes = (double)(n + emitted) * sizeof(float);
     printf("split_sign: %zu floats on %s\n", n, info.name);
+    printf("  kernel    %s\n", opt.kernel);
     for (int k = 0; k < OUT_COUNT; ++k)
         printf("  %-9s %10zu records  (%s)\n", out_names[k], got_len[k],
                out_modes[k] == SLUICE_ORDERED ? "ordered" : "unordered");

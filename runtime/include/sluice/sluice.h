@@ -263,8 +263,17 @@ void sluice_program_destroy(sluice_program *program);
 
 /**
  * Compiles now if not yet compiled. A compile error returns
- * SLUICE_ERROR_BUILD; the compiler's log (with file and line) is then in
- * sluice_program_build_log() and the context's error message.
+ * SLUICE_ERROR_BUILD. The context's error message then leads with the
+ * errors in one shape, whichever OpenCL implementation compiled them:
+ *
+ *     my.cl:12:5: error: use of undeclared identifier 'x'
+ *
+ * one line per error, the first error first, with the file names given to
+ * sluice_program_create_file() or _source() (also where the vendor's log
+ * names the source `<kernel>` or the like); warnings only in verbose mode.
+ * A line "building my.cl failed ..." follows, then the compiler's own log
+ * when it holds more (source excerpts, notes) or in verbose mode. That log,
+ * as the compiler wrote it, is in sluice_program_build_log().
  *
  * A build that succeeds prints nothing, warnings or not: they are in the
  * build log. (With the verbose option or SLUICE_VERBOSE=1 the log is printed
