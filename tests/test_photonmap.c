@@ -204,6 +204,8 @@ static void test_cli(const char *exe)
         {"--shells-per-pass some", "--shells-per-pass"},
         {"--time x", "--time"},
         {"--alpha 1.5", "--alpha"},
+        {"--target-error 0", "--target-error"},
+        {"--target-error 2", "--target-error"},
         {"--alpha 0", "--alpha"},
         {"--progressive --alpha", "--alpha"},
         {"--frobnicate 1", "--frobnicate"},

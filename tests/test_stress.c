@@ -15,6 +15,9 @@
  *   furnace_progressive progressive photon mapping on the same sphere: its
  *                       RMS error falls with samples (bound: 16 samples
  *                       below 0.6 of 1; theory 0.40), mean within 1%
+ *   target_error        --target-error's estimate (from the render itself)
+ *                       against the true relMSE on the furnace: within a
+ *                       factor of 2
  *   accumulation        10^6 samples per pixel through the film's 64-bit fixed
  *                       point against a double sum: within one quantum
  *                       (2^-24) of the mean; a float sum's drift is printed
@@ -42,6 +45,7 @@
 #include "point_grid.h"
 #include "kernels.h"
 #include "photonmap.h"
+#include "progressive.h"
 #include "render.h"
 #include "scene.h"
 #include "scene_copy.h"
@@ -394,6 +398,79 @@ static void test_furnace_progressive(void)
     sr_scene_destroy(s);
 }
 
+/* --target-error's estimate against the truth: the path-traced furnace
+ * rendered until the relMSE estimated from the render itself (the image
+ * after n samples against the one after 2n) is at most 1e-3; its true
+ * relMSE against the analytic image must then be within a factor of 2 of
+ * the target (the estimate is itself noisy: a factor of 2 either way). */
+typedef struct target_run {
+    rt_renderer *r;
+} target_run;
+
+static sluice_status target_step(void *user)
+{
+    return rt_renderer_sample(((target_run *)user)->r);
+}
+
+static sluice_status target_resolve(void *user, sr_image *img)
+{
+    return rt_renderer_image(((target_run *)user)->r, img, NULL);
+}
+
+static void test_target_error(void)
+{
+    sr_scene *s = furnace_scene();
+    if (!s)
+        return;
+    char err[512] = "";
+    rt_tracer_options to = rt_tracer_options_default();
+    to.exec = RT_EXEC_FUSED;
+    rt_tracer *t = NULL;
+    target_run u = {NULL};
+    sr_image *img = NULL, *truth = NULL;
+    sluice_status st = rt_tracer_create(ctx, s, &to, &t, err, sizeof err);
+    rt_render_options o;
+    memset(&o, 0, sizeof o);
+    o.mode = RT_MODE_PATH;
+    o.width = 32;
+    o.height = 32;
+    o.max_depth = 64;
+    o.light_samples = 1;
+    o.seed = 3;
+    if (st == SLUICE_OK)
+        st = rt_renderer_create(t, &o, &u.r, err, sizeof err);
+    const double target = 1e-3;
+    sr_progressive p = {"samples", 4096, 0, 0, 0, NULL, target, target_resolve, 32, 32};
+    sr_progressive_result res;
+    if (st == SLUICE_OK)
+        st = sr_progressive_run(&p, target_step, NULL, &u, &res);
+    if (st == SLUICE_OK)
+        st = sr_image_create(32, 32, 3, &img, err, sizeof err);
+    if (st == SLUICE_OK)
+        st = sr_image_create(32, 32, 3, &truth, err, sizeof err);
+    if (st == SLUICE_OK)
+        st = rt_renderer_image(u.r, img, NULL);
+    CHECK(st == SLUICE_OK, "target error: %s %s", err, sluice_context_error(ctx));
+    if (st == SLUICE_OK) {
+        float *q = sr_image_pixels(truth);
+        for (size_t i = 0; i < 32 * 32 * 3; ++i)
+            q[i] = (float)furnace_radiance();
+        sr_image_metrics m;
+        sr_image_compare(img, truth, &m, err, sizeof err);
+        printf("target relMSE %g: stopped after %u samples at an estimate of %.3g; true relMSE "
+               "%.3g (bound: within a factor of 2 of the target)\n",
+               target, res.done, res.error, m.rel_mse);
+        CHECK(res.converged && m.rel_mse <= 2 * target && m.rel_mse >= target / 8,
+              "target error: converged %d after %u, estimate %g, true %g", res.converged, res.done,
+              res.error, m.rel_mse);
+    }
+    sr_image_destroy(img);
+    sr_image_destroy(truth);
+    rt_renderer_destroy(u.r);
+    rt_tracer_destroy(t);
+    sr_scene_destroy(s);
+}
+
 /* ------------------------------------------------------------------ */
 /* Accumulation                                                        */
 /* ------------------------------------------------------------------ */
@@ -714,6 +791,7 @@ int main(void)
     test_furnace_path();
     test_furnace_photonmap();
     test_furnace_progressive();
+    test_target_error();
     test_scaled_translated();
     test_grazing();
     test_leaks();

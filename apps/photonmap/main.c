@@ -209,6 +209,13 @@ static sluice_status checkpoint(void *user)
     return write_image(user, NULL);
 }
 
+static sluice_status resolve(void *user, sr_image *img)
+{
+    run *u = user;
+    const pm_stats *s = pm_renderer_stats(u->r);
+    return sr_film_resolve(pm_renderer_film(u->r), s->samples ? 1.0 / s->samples : 1.0, img, NULL);
+}
+
 /* --pass-images: the pattern with -NNNN before its extension. */
 static sluice_status write_pass_image(void *user, const sr_image *img, unsigned index, char *err,
                                       size_t err_size)
@@ -371,8 +378,8 @@ int main(int argc, char **argv)
     if (!c.have_depth)
         o->max_depth = rs->max_depth;
     unsigned spp = c.have_spp ? c.spp : 1;
-    if (cc->time_limit > 0 && !c.have_spp)
-        spp = 1u << 20;
+    if ((cc->time_limit > 0 || cc->target_error > 0) && !c.have_spp)
+        spp = 1u << 20; /* as many as the time or the target allows */
 
     if (c.pass_images) {
         o->pass_image = write_pass_image;
@@ -403,11 +410,14 @@ int main(int argc, char **argv)
     memset(&u, 0, sizeof u);
     u.r = r;
     u.out = cc->out;
-    sr_progressive prog = {"samples", spp, cc->time_limit, cc->checkpoint, cc->progress, stderr};
+    sr_progressive prog = {"samples",    spp,      cc->time_limit,   cc->checkpoint,
+                           cc->progress, stderr,   cc->target_error, resolve,
+                           o->width,     o->height};
     sr_progressive_result pr;
     st = sr_progressive_run(&prog, sample, checkpoint, &u, &pr);
     if (st != SLUICE_OK)
         goto done;
+    sr_progressive_report_target(PROG, &prog, &pr, stderr);
     double total = sr_clock_seconds() - t0;
     size_t bad = 0;
     if (write_image(&u, &bad) != SLUICE_OK)

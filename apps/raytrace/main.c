@@ -181,6 +181,12 @@ static sluice_status checkpoint(void *user)
     return write_image(user, NULL);
 }
 
+static sluice_status resolve(void *user, sr_image *img)
+{
+    run *r = user;
+    return rt_renderer_image(r->rend, img, NULL);
+}
+
 int main(int argc, char **argv)
 {
     cli c;
@@ -229,8 +235,8 @@ int main(int argc, char **argv)
     ro.light_samples = c.have_ls ? c.light_samples : (rs->light_samples ? rs->light_samples : 1);
     ro.seed = cc->seed;
     unsigned spp = c.have_spp ? c.spp : (rs->samples_per_pixel ? rs->samples_per_pixel : 1);
-    if (cc->time_limit > 0 && !c.have_spp)
-        spp = 1u << 20; /* as many as the time allows */
+    if ((cc->time_limit > 0 || cc->target_error > 0) && !c.have_spp)
+        spp = 1u << 20; /* as many as the time or the target allows */
     if ((unsigned long long)ro.width * ro.height > (1u << 26)) {
         fprintf(stderr, PROG ": --size %ux%u: too many pixels\n", ro.width, ro.height);
         sr_scene_destroy(scene);
@@ -253,11 +259,14 @@ int main(int argc, char **argv)
     if (cc->profile)
         sluice_profile_reset(ctx);
     run r = {rend, cc->out, ctx};
-    sr_progressive prog = {"samples", spp, cc->time_limit, cc->checkpoint, cc->progress, stderr};
+    sr_progressive prog = {"samples",    spp,      cc->time_limit,   cc->checkpoint,
+                           cc->progress, stderr,   cc->target_error, resolve,
+                           ro.width,     ro.height};
     sr_progressive_result pr;
     st = sr_progressive_run(&prog, sample, checkpoint, &r, &pr);
     if (st != SLUICE_OK)
         goto done;
+    sr_progressive_report_target(PROG, &prog, &pr, stderr);
     size_t bad_pixels = 0;
     if (write_image(&r, &bad_pixels) != SLUICE_OK)
         goto done;

@@ -104,8 +104,9 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
         c->profile = 0;
         return 1;
     }
-    static const char *const valued[] = {"--scene", "--out",        "--stats", "--device", "--size",
-                                         "--seed",  "--checkpoint", "--time",  NULL};
+    static const char *const valued[] = {"--scene",        "--out",  "--stats",      "--device",
+                                         "--size",         "--seed", "--checkpoint", "--time",
+                                         "--target-error", NULL};
     int which = sr_cli_choice(a, valued);
     if (which < 0)
         return 0;
@@ -138,9 +139,13 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
         if (!sr_cli_uint(v, 1, 1u << 20, &c->checkpoint))
             return sr_cli_bad(prog, a, v, "expected a whole number from 1 to 1048576");
         break;
-    default:
+    case 7:
         if (!sr_cli_double(v, 1e-3, 1e7, &c->time_limit))
             return sr_cli_bad(prog, a, v, "expected seconds, from 0.001 to 10000000");
+        break;
+    default:
+        if (!sr_cli_double(v, 1e-12, 1.0, &c->target_error))
+            return sr_cli_bad(prog, a, v, "expected a relMSE above 0 and at most 1");
         break;
     }
     return 1;
@@ -174,6 +179,10 @@ void sr_cli_common_usage(FILE *out)
           "  --checkpoint N           write the image every N samples or passes\n"
           "  --time SECONDS           stop after this much rendering time (the image so far\n"
           "                           is written; at least one sample or pass runs)\n"
+          "  --target-error E         stop once the image's relMSE, estimated from the\n"
+          "                           render itself (the image after n samples against the\n"
+          "                           one after 2n: noise, not bias), is at most E; checked\n"
+          "                           at 2, 4, 8, ... samples (with no --spp: up to 2^20)\n"
           "  --device NAME            OpenCL device (substring of \"platform / device\")\n"
           "  --no-profile             do not time kernels\n"
           "  --quiet                  no statistics table\n"

@@ -23,6 +23,7 @@ typedef struct sr_cli_common {
     unsigned seed;          /**< --seed (default 1) */
     unsigned checkpoint;    /**< --checkpoint N; 0: none */
     double time_limit;      /**< --time SECONDS; 0: none */
+    double target_error;    /**< --target-error E (relMSE); 0: none */
     int progress;           /**< --progress */
     int profile;            /**< 1 unless --no-profile */
     int quiet;              /**< --quiet */

@@ -9,6 +9,7 @@
 #ifndef SR_PROGRESSIVE_H
 #define SR_PROGRESSIVE_H
 
+#include "image.h"
 #include "sluice/sluice.h"
 
 #include <stdio.h>
@@ -19,6 +20,9 @@ typedef sluice_status (*sr_step_fn)(void *user);
 /** Writes the image so far (a checkpoint). */
 typedef sluice_status (*sr_checkpoint_fn)(void *user);
 
+/** Resolves the image so far (the mean of the steps done) into `img`. */
+typedef sluice_status (*sr_resolve_fn)(void *user, sr_image *img);
+
 /** How to run the loop. */
 typedef struct sr_progressive {
     const char *unit;    /**< what a step is, plural: "samples", "passes" */
@@ -28,6 +32,14 @@ typedef struct sr_progressive {
     unsigned checkpoint; /**< call `checkpoint` every this many steps; 0: never */
     int progress;        /**< report progress on `out` */
     FILE *out;           /**< where progress goes (stderr when NULL) */
+    /** Stop once the image's rel_mse, estimated from the render itself,
+     *  is at most this (0: never). The estimate (sr_image_half_rel_mse)
+     *  compares the image after 2n steps with the one after n, so it is
+     *  taken at 2, 4, 8, ... steps and the render stops at a power of two.
+     *  It counts noise, not bias. Needs `resolve`, width and height. */
+    double target_error;
+    sr_resolve_fn resolve;
+    unsigned width, height; /**< the image's size, for target_error */
 } sr_progressive;
 
 /** How the loop went. */
@@ -36,6 +48,8 @@ typedef struct sr_progressive_result {
     double seconds;  /**< wall time of the steps (and checkpoints) */
     int interrupted; /**< stopped by Ctrl-C */
     int out_of_time; /**< stopped by the time limit */
+    int converged;   /**< stopped at the target error */
+    double error;    /**< the last error estimate (-1: none taken) */
 } sr_progressive_result;
 
 /**
@@ -48,6 +62,11 @@ typedef struct sr_progressive_result {
 sluice_status sr_progressive_run(const sr_progressive *p, sr_step_fn step,
                                  sr_checkpoint_fn checkpoint, void *user,
                                  sr_progressive_result *res);
+
+/** With a target error, says on `out` where the render stopped: the last
+ *  estimate, after how many steps, and whether it reached the target. */
+void sr_progressive_report_target(const char *prog, const sr_progressive *p,
+                                  const sr_progressive_result *res, FILE *out);
 
 /** Installs the SIGINT handler (the first Ctrl-C asks to stop; a second one
  *  gets the default action and ends the program at once). The flag it sets
