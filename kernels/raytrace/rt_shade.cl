@@ -71,8 +71,8 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
             float3 contrib =
                 w * rt_brdf(&s.m, s.n, wi, wo) * (float3)(pl.ir, pl.ig, pl.ib) * (c / d2);
             int go = lit && c > 0.0f && dot(s.ng, wi) > 0.0f && rt_max3(contrib) > 0.0f;
-            RT_EMIT_SHADOW(go, rt_spawn(s.p, off, wi, dist * 0.999f, contrib, ray.pixel, 0u,
-                                        RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
+            RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, (float3)(pl.px, pl.py, pl.pz), contrib,
+                                             ray.pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
             SLUICE_COUNT(1, go);
         }
         uint nl = (lit && f.area_lights) ? f.light_samples : 0u;
@@ -93,8 +93,8 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
                              (c * cl / d2 * f.area_total / (float)f.light_samples);
             int go = lit && lt != h.tri && c > 0.0f && cl > 0.0f && dot(s.ng, wi) > 0.0f &&
                      rt_max3(contrib) > 0.0f;
-            RT_EMIT_SHADOW(go, rt_spawn(s.p, off, wi, dist * 0.999f, contrib, ray.pixel, 0u,
-                                        RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
+            RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, q, contrib, ray.pixel,
+                                             RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
             SLUICE_COUNT(1, go);
         }
 #ifdef RT_GATHER

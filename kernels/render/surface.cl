@@ -107,6 +107,19 @@ inline rt_ray rt_spawn(float3 p, float3 off, float3 d, float tmax, float3 w, uin
     return r;
 }
 
+/* A shadow ray from the surface point `p` to the light point `q`. Its origin
+ * is offset by `off` (as rt_spawn does), so it is aimed from there and ends
+ * 0.1% short of `q`: aimed from `p` with p's distance, the offset carried it
+ * onto the light's own surface wherever the offset exceeded 0.1% of the
+ * distance (scene_eps is 1e-4 of the scene's diagonal: lit points nearer an
+ * area light than about a tenth of the diagonal came out in shadow). */
+inline rt_ray rt_shadow_ray(float3 p, float3 off, float3 q, float3 w, uint pixel, uint flags)
+{
+    float3 l = q - (p + off);
+    float dist = length(l);
+    return rt_spawn(p, off, l / dist, dist * 0.999f, w, pixel, 0u, flags);
+}
+
 inline float rt_max3(float3 v)
 {
     return fmax(v.x, fmax(v.y, v.z));
