@@ -41,6 +41,8 @@ import time
 
 import numpy as np
 
+from references import cpu_model
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 VARIANT = "scalar_rgb"
@@ -50,17 +52,6 @@ def mitsuba():
     import mitsuba as mi
     mi.set_variant(VARIANT)
     return mi
-
-
-def cpu_model():
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
-        for line in out.splitlines():
-            if line.startswith("Model name:"):
-                return line.split(":", 1)[1].strip()
-    except (OSError, subprocess.CalledProcessError):
-        pass
-    return "unknown"
 
 
 def read_exr(path):

@@ -1268,6 +1268,24 @@ static void test_cli(const char *exe)
     CHECK(rc == 2, "no argument: rc %d", rc);
 }
 
+/* The total area of a scene's triangles, in double. */
+static double scene_area(const sr_scene *s)
+{
+    const float *p = sr_scene_positions(s);
+    const uint32_t *idx = sr_scene_indices(s);
+    double area = 0;
+    for (size_t t = 0; t < sr_scene_triangle_count(s); ++t) {
+        const float *a = p + 3 * idx[3 * t], *b = p + 3 * idx[3 * t + 1],
+                    *c = p + 3 * idx[3 * t + 2];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+               v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
+               z = u[0] * v[1] - u[1] * v[0];
+        area += 0.5 * sqrt(x * x + y * y + z * z);
+    }
+    return area;
+}
+
 /* sluice-scene --export-mitsuba: scene.xml names what Mitsuba needs, and the
  * PLY files it writes read back (with assimp) to the scene's triangles and
  * area. No Mitsuba needed. */
@@ -1316,17 +1334,7 @@ static void test_cli_export(const char *exe)
             if (!s)
                 continue;
             tris += sr_scene_triangle_count(s);
-            const float *p = sr_scene_positions(s);
-            const uint32_t *idx = sr_scene_indices(s);
-            for (size_t t = 0; t < sr_scene_triangle_count(s); ++t) {
-                const float *a = p + 3 * idx[3 * t], *b = p + 3 * idx[3 * t + 1],
-                            *c = p + 3 * idx[3 * t + 2];
-                double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
-                       v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-                double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
-                       z = u[0] * v[1] - u[1] * v[0];
-                area += 0.5 * sqrt(x * x + y * y + z * z);
-            }
+            area += scene_area(s);
             if (strstr(files[i][k], "smooth"))
                 CHECK(sr_scene_normals(s) != NULL, "%s: no normals", path);
             sr_scene_destroy(s);
@@ -1334,18 +1342,7 @@ static void test_cli_export(const char *exe)
         if (orig && i < 2) {
             CHECK(tris == sr_scene_triangle_count(orig), "%s: %zu triangles exported of %zu",
                   scenes[i], tris, sr_scene_triangle_count(orig));
-            double want = 0;
-            const float *p = sr_scene_positions(orig);
-            const uint32_t *idx = sr_scene_indices(orig);
-            for (size_t t = 0; t < sr_scene_triangle_count(orig); ++t) {
-                const float *a = p + 3 * idx[3 * t], *b = p + 3 * idx[3 * t + 1],
-                            *c = p + 3 * idx[3 * t + 2];
-                double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
-                       v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-                double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
-                       z = u[0] * v[1] - u[1] * v[0];
-                want += 0.5 * sqrt(x * x + y * y + z * z);
-            }
+            double want = scene_area(orig);
             CHECK(fabs(area - want) <= 1e-5 * want, "%s: area %g exported, %g in the scene",
                   scenes[i], area, want);
         }
