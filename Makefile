@@ -3,12 +3,16 @@
 #   make test   install what is missing, build, run the whole suite (ctest)
 #   make bench  install the benchmarks' peers (Embree), run the benchmarks
 #               (bench/results/streams.json, raytrace.json, knn.json, photonmap.json)
+#   make references  converged path-traced references of cornell, glassball
+#               and ring (bench/references/, git-ignored; bench/references.py)
+#   make mitsuba-agreement  install Mitsuba 3 into bench/.venv, render the
+#               same scenes with it and compare (bench/mitsuba_compare.py)
 #   make asan   the suite again in an ASan+UBSan build of the host code
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 MESON_FLAGS ?=
 
-.PHONY: all deps build demo test bench asan install clean
+.PHONY: all deps build demo test bench references mitsuba-agreement asan install clean
 
 all: build
 
@@ -37,6 +41,16 @@ bench:
 	$(BUILD)/bench/bench_raytrace --out bench/results/raytrace.json
 	$(BUILD)/bench/bench_knn --out bench/results/knn.json
 	python3 bench/bench_photonmap.py --exe $(BUILD)/apps/photonmap/sluice-photonmap --out bench/results/photonmap.json
+
+references: build
+	POCL_CACHE_DIR=$${POCL_CACHE_DIR:-$(CURDIR)/$(BUILD)/pocl-cache} python3 bench/references.py \
+	    --exe $(BUILD)/apps/raytrace/sluice-raytrace
+
+mitsuba-agreement: references
+	sh tools/install-mitsuba.sh
+	POCL_CACHE_DIR=$${POCL_CACHE_DIR:-$(CURDIR)/$(BUILD)/pocl-cache} bench/.venv/bin/python \
+	    bench/mitsuba_compare.py --scene-exe $(BUILD)/apps/common/sluice-scene \
+	    --raytrace $(BUILD)/apps/raytrace/sluice-raytrace
 
 $(ASAN_BUILD)/build.ninja: | deps
 	meson setup $(ASAN_BUILD) -Dbuildtype=debug -Db_sanitize=address,undefined \

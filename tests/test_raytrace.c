@@ -789,6 +789,55 @@ static void test_cli(const char *exe)
     sr_image_destroy(img);
 }
 
+/* A 1 x 1 one-sided area light (radiance 10) at height 1 over a 20 x 20
+ * diffuse floor (albedo 0.5): under the light's centre the floor's radiance
+ * is 0.5 / pi * E with E = 10 * 4 pi F, F = 0.0598641 the form factor to a
+ * 0.5 x 0.5 rectangle with a corner overhead (bench/scenes/quadlight.json).
+ * Shadow rays start offset from the surface (scene_eps, 1e-4 of the
+ * diagonal); aimed from the unshifted point with its distance, they reached
+ * the light's own surface and every pixel was black (issue 13, item 1). */
+static void test_near_area_light(void)
+{
+    FILE *f = fopen("rt_near_light.json", "w");
+    if (!f) {
+        CHECK(0, "cannot write rt_near_light.json");
+        return;
+    }
+    fputs("{\"materials\": {\"floor\": {\"kind\": \"diffuse\", \"albedo\": 0.5},"
+          " \"lamp\": {\"kind\": \"emissive\", \"emission\": 10}},"
+          " \"meshes\": [{\"shape\": \"quad\", \"corner\": [-10, 0, -10], \"u\": [0, 0, 20],"
+          " \"v\": [20, 0, 0], \"material\": \"floor\"}, {\"shape\": \"quad\","
+          " \"corner\": [-0.5, 1, -0.5], \"u\": [1, 0, 0], \"v\": [0, 0, 1],"
+          " \"material\": \"lamp\"}],"
+          " \"camera\": {\"eye\": [0, 0.5, 0], \"look_at\": [0, 0, 0], \"up\": [0, 0, 1],"
+          " \"vfov\": 20, \"width\": 32, \"height\": 32}}",
+          f);
+    fclose(f);
+    sr_scene *s = load("rt_near_light.json");
+    if (!s)
+        return;
+    const double expect = 0.5 * 10.0 * 4.0 * 0.0598641; /* pi cancels */
+    const unsigned modes[2] = {RT_MODE_SHADOW, RT_MODE_PATH};
+    for (int k = 0; k < 2; ++k) {
+        unsigned mode = modes[k];
+        sr_image *img = render(s, RT_EXEC_STREAM, mode, 32, 32, 16, 1);
+        if (!img)
+            continue;
+        const float *px = sr_image_pixels_const(img);
+        double sum = 0;
+        for (unsigned y = 12; y < 20; ++y)
+            for (unsigned x = 12; x < 20; ++x)
+                sum += px[(y * 32 + x) * 3];
+        double mean = sum / 64;
+        printf("area light near a large floor, %s: centre %.4f, analytic %.4f\n", mode_names[mode],
+               mean, expect);
+        CHECK(fabs(mean / expect - 1.0) < 0.05, "%s: centre %g, analytic %g", mode_names[mode],
+              mean, expect);
+        sr_image_destroy(img);
+    }
+    sr_scene_destroy(s);
+}
+
 int main(int argc, char **argv)
 {
     const char *write_dir = NULL, *cli = NULL;
@@ -816,6 +865,7 @@ int main(int argc, char **argv)
     test_reference_images(NULL);
     test_determinism();
     test_camera_inside();
+    test_near_area_light();
     sluice_context_destroy(ctx);
     return check_summary();
 }

@@ -1268,10 +1268,98 @@ static void test_cli(const char *exe)
     CHECK(rc == 2, "no argument: rc %d", rc);
 }
 
+/* The total area of a scene's triangles, in double. */
+static double scene_area(const sr_scene *s)
+{
+    const float *p = sr_scene_positions(s);
+    const uint32_t *idx = sr_scene_indices(s);
+    double area = 0;
+    for (size_t t = 0; t < sr_scene_triangle_count(s); ++t) {
+        const float *a = p + 3 * idx[3 * t], *b = p + 3 * idx[3 * t + 1],
+                    *c = p + 3 * idx[3 * t + 2];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+               v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
+               z = u[0] * v[1] - u[1] * v[0];
+        area += 0.5 * sqrt(x * x + y * y + z * z);
+    }
+    return area;
+}
+
+/* sluice-scene --export-mitsuba: scene.xml names what Mitsuba needs, and the
+ * PLY files it writes read back (with assimp) to the scene's triangles and
+ * area. No Mitsuba needed. */
+static void test_cli_export(const char *exe)
+{
+    static char out[1 << 16];
+    const char *const scenes[] = {"glassball", "ring", "cornell"};
+    const char *const files[][3] = {{"mat0-flat", "mat1-smooth", "mat2-flat"},
+                                    {"mat0-flat", "mat1-flat", "mat1-smooth"},
+                                    {"mat0-flat", "mat3-flat", NULL}};
+    for (int i = 0; i < 3; ++i) {
+        char args[256], path[256];
+        snprintf(args, sizeof args, "%s --export-mitsuba scene_cli_export_%s", scenes[i],
+                 scenes[i]);
+        int rc = run(exe, args, out, sizeof out);
+        CHECK(rc == 0, "%s: rc %d: %s", args, rc, out);
+        snprintf(path, sizeof path, "scene_cli_export_%s/scene.xml", scenes[i]);
+        FILE *f = fopen(path, "rb");
+        size_t n = f ? fread(out, 1, sizeof out - 1, f) : 0;
+        out[n] = '\0';
+        if (f)
+            fclose(f);
+        CHECK(strstr(out, "<scene version=\"3.0.0\">") && strstr(out, "</scene>") &&
+                  strstr(out, "fov_axis") && strstr(out, "<rfilter type=\"box\"/>") &&
+                  strstr(out, "name=\"max_depth\" value=\"7\""),
+              "%s:\n%s", path, out);
+        if (i == 0)
+            CHECK(strstr(out, "type=\"dielectric\"") && strstr(out, "int_ior\" value=\"1.5\"") &&
+                      strstr(out, "<emitter type=\"area\"><rgb name=\"radiance\" value=\"25, "),
+                  "glassball: %s", out);
+        if (i == 1)
+            CHECK(strstr(out, "type=\"conductor\"") && strstr(out, "<emitter type=\"point\">"),
+                  "ring: %s", out);
+        sr_scene *orig = NULL;
+        char err[1024];
+        CHECK(sr_scene_load(scenes[i], NULL, &orig, err, sizeof err) == SLUICE_OK, "%s", err);
+        size_t tris = 0;
+        double area = 0;
+        for (int k = 0; k < 3 && files[i][k]; ++k) {
+            snprintf(path, sizeof path, "scene_cli_export_%s/meshes/%s.ply", scenes[i],
+                     files[i][k]);
+            sr_scene_load_options o = {0};
+            o.flags = SR_SCENE_DEFAULT_LIGHT;
+            sr_scene *s = NULL;
+            CHECK(sr_scene_load(path, &o, &s, err, sizeof err) == SLUICE_OK, "%s: %s", path, err);
+            if (!s)
+                continue;
+            tris += sr_scene_triangle_count(s);
+            area += scene_area(s);
+            if (strstr(files[i][k], "smooth"))
+                CHECK(sr_scene_normals(s) != NULL, "%s: no normals", path);
+            sr_scene_destroy(s);
+        }
+        if (orig && i < 2) {
+            CHECK(tris == sr_scene_triangle_count(orig), "%s: %zu triangles exported of %zu",
+                  scenes[i], tris, sr_scene_triangle_count(orig));
+            double want = scene_area(orig);
+            CHECK(fabs(area - want) <= 1e-5 * want, "%s: area %g exported, %g in the scene",
+                  scenes[i], area, want);
+        }
+        sr_scene_destroy(orig);
+    }
+    int rc = run(exe, "cornell --export-mitsuba", out, sizeof out);
+    CHECK(rc == 2 && strstr(out, "needs a directory"), "--export-mitsuba alone: rc %d: %s", rc,
+          out);
+    rc = run(exe, "cornell --export-mitsuba /nonexistent/dir/x", out, sizeof out);
+    CHECK(rc == 1 && strstr(out, "cannot create"), "bad directory: rc %d: %s", rc, out);
+}
+
 int main(int argc, char **argv)
 {
     if (argc == 3 && strcmp(argv[1], "--cli") == 0) {
         test_cli(argv[2]);
+        test_cli_export(argv[2]);
         return check_summary();
     }
     test_builtins();

@@ -64,9 +64,9 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
         int lit = f.mode == RT_MODE_SHADOW || (!specular && f.mode != RT_MODE_CAST);
         for (uint l = 0u; l < (lit ? f.point_lights : 0u); ++l) {
             rt_point_light pl = plights[l];
-            /* from the offset origin, and all the way: a point light has no
-             * surface to stop short of, and an occluder just in front of it
-             * (a wall it sits outside of) must still block */
+            /* all the way: a point light has no surface to stop short of,
+             * and an occluder just in front of it (a wall it sits outside
+             * of) must still block */
             float3 L = (float3)(pl.px, pl.py, pl.pz) - (s.p + off);
             float d2 = dot(L, L), dist = sqrt(d2);
             float3 wi = L / dist;
@@ -74,8 +74,8 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
             float3 contrib =
                 w * rt_brdf(&s.m, s.n, wi, wo) * (float3)(pl.ir, pl.ig, pl.ib) * (c / d2);
             int go = lit && c > 0.0f && dot(s.ng, wi) > 0.0f && rt_max3(contrib) > 0.0f;
-            RT_EMIT_SHADOW(go, rt_spawn(s.p, off, wi, dist, contrib, ray.pixel, 0u,
-                                        RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
+            RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, (float3)(pl.px, pl.py, pl.pz), 1.0f, contrib,
+                                             ray.pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
             SLUICE_COUNT(1, go);
         }
         uint nl = (lit && f.area_lights) ? f.light_samples : 0u;
@@ -100,8 +100,8 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
              * 1e-5, far above the rounding of t (1e-7) and far below any gap
              * a scene would model (0.001 let light through walls it sat
              * just outside of: test_stress's leak case) */
-            RT_EMIT_SHADOW(go, rt_spawn(s.p, off, wi, dist * 0.99999f, contrib, ray.pixel, 0u,
-                                        RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
+            RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, q, 0.99999f, contrib, ray.pixel,
+                                             RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
             SLUICE_COUNT(1, go);
         }
 #ifdef RT_GATHER

@@ -107,18 +107,38 @@ inline rt_ray rt_spawn(float3 p, float3 off, float3 d, float tmax, float3 w, uin
     return r;
 }
 
+/* A shadow ray from the surface point `p` to the light point `q`, ending
+ * at the fraction `stop` of the way. Its origin is offset by `off` (as
+ * rt_spawn does), so it is aimed and measured from there: aimed from `p`
+ * with p's distance, the offset carried it onto the light's own surface
+ * wherever the offset exceeded what it stopped short by (scene_eps is 1e-4
+ * of the scene's diagonal: lit points near an area light came out in
+ * shadow). */
+inline rt_ray rt_shadow_ray(float3 p, float3 off, float3 q, float stop, float3 w, uint pixel,
+                            uint flags)
+{
+    float3 l = q - (p + off);
+    float dist = length(l);
+    return rt_spawn(p, off, l / dist, dist * stop, w, pixel, 0u, flags);
+}
+
 inline float rt_max3(float3 v)
 {
     return fmax(v.x, fmax(v.y, v.z));
 }
 
-/* Schlick's approximation of the Fresnel reflectance of a dielectric. */
+/* The Fresnel reflectance of a dielectric for unpolarised light, from
+ * Fresnel's equations (the mean of the s and p reflectances) with the
+ * incident and transmitted cosines; `entering`: from outside (index 1)
+ * into the material (index ior). Schlick's approximation, used here before,
+ * reflects 0.042 instead of 0.050 at 45 degrees for ior 1.5: glassball's
+ * highlights came out 5-7% darker than Mitsuba's (bench/README.md). */
 inline float rt_fresnel(float cos_i, float cos_t, int entering, float ior)
 {
-    float r0 = (1.0f - ior) / (1.0f + ior);
-    r0 *= r0;
-    float c = 1.0f - (entering ? cos_i : cos_t);
-    return r0 + (1.0f - r0) * c * c * c * c * c;
+    float n1 = entering ? 1.0f : ior, n2 = entering ? ior : 1.0f;
+    float rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    float rp = (n1 * cos_t - n2 * cos_i) / (n1 * cos_t + n2 * cos_i);
+    return 0.5f * (rs * rs + rp * rp);
 }
 
 /* The direction at angle phi about the unit axis `n` whose sine and cosine
