@@ -50,8 +50,9 @@ typedef struct pm_options {
     void *pass_image_user;        /**< passed to pass_image */
     /** Non-zero: progressive photon mapping (Hachisuka et al. 2009, in Knaus
      *  and Zwicker's 2011 form): every sample traces new photons, rebuilds the
-     *  map and estimates with a radius search of radius r_i, where r_0 is the
-     *  radius k photons would take spread evenly (or max_radius when set) and
+     *  map and estimates with a radius search of radius r_i, where r_0 is
+     *  max_radius when set, else the geometric mean of two radii of k
+     *  photons: around the photons themselves (median) and spread evenly, and
      *  r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1); the image is the mean of the
      *  samples, and its bias and noise both vanish as samples grow. */
     int progressive;
