@@ -183,6 +183,22 @@ static inline float pm_hmax8(float8 v)
     return fmax(b.x, b.y);
 }
 
+/* Lists photon j of the map as the estimate's photon number c (its index in
+ * the caller's stream), or marks the list cut. */
+static inline void pm_index(pm_state *st, const pm_knn_params *p, global const float *map, uint j,
+                            uint c, global uint *indices)
+{
+    if (c < p->index_cap)
+        indices[(ulong)st->q * p->index_cap + c] = as_uint(map[PM_MAP_ID * p->map_stride + j]);
+    else
+        st->flags |= PM_KNN_INDICES_CUT;
+}
+
+/* Runs shorter than this are examined one photon at a time: a block's setup
+ * and sums cost more than it saves there (glassball, with Purcell's
+ * 250x1x250 grid: runs of one cell of a few photons; measured). *
+#define PM_SHORT_RUN 8u
+
 /* Examines the photons map[b .. e) (Purcell Fig. 6.6): in the cell-ordered
  * copy of the map (pm_knn_gather) a run of cells along x is one contiguous
  * run of photons, examined in the order of their cells. The planes are read
@@ -190,11 +206,41 @@ static inline float pm_hmax8(float8 v)
  * side by side (explicit vectors: the CPU's SIMD lanes whatever the
  * work-group vectorizer makes of the loop around it); the photons a block
  * takes are added in order, so the result is the one-at-a-time search's,
- * except for the order of the power sums. */
+ * except for the order of the power sums. Short runs go one at a time. */
 static inline void pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params *p, uint exact,
                                global const float *map, global uint *indices)
 {
     uint stride = p->map_stride;
+    if (e - b < PM_SHORT_RUN) {
+        for (uint j = b; j < e; ++j) {
+            float dx = map[PM_MAP_X * stride + j] - st->px,
+                  dy = map[PM_MAP_Y * stride + j] - st->py,
+                  dz = map[PM_MAP_Z * stride + j] - st->pz;
+            float d2 = dx * dx + dy * dy + dz * dz;
+            if (!(d2 <= p->max_r2))
+                continue;
+            if (p->normal_filter &&
+                !(st->nx * map[PM_MAP_DX * stride + j] + st->ny * map[PM_MAP_DY * stride + j] +
+                      st->nz * map[PM_MAP_DZ * stride + j] <
+                  0.0f))
+                continue;
+            if (exact) {
+                pm_heap_add(st, p->k, d2, j);
+                continue;
+            }
+            if (st->count < p->k)
+                st->r2 = fmax(st->r2, d2);
+            else if (!(d2 <= st->r2))
+                continue;
+            if (p->index_cap)
+                pm_index(st, p, map, j, st->count, indices);
+            st->sr += map[PM_MAP_R * stride + j];
+            st->sg += map[PM_MAP_G * stride + j];
+            st->sb += map[PM_MAP_B * stride + j];
+            st->count++;
+        }
+        return;
+    }
     const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
     float8 ar = (float8)(0.0f), ag = (float8)(0.0f), ab = (float8)(0.0f);
     for (uint j = b; j < e; j += PM_MAP_BLOCK) {
@@ -253,16 +299,9 @@ static inline void pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params
             int mm[PM_MAP_BLOCK];
             vstore8(m, 0, mm);
             uint c = st->count;
-            for (int l = 0; l < PM_MAP_BLOCK; ++l) {
-                if (!mm[l])
-                    continue;
-                if (c < p->index_cap)
-                    indices[(ulong)st->q * p->index_cap + c] =
-                        as_uint(map[PM_MAP_ID * stride + j + (uint)l]);
-                else
-                    st->flags |= PM_KNN_INDICES_CUT;
-                ++c;
-            }
+            for (int l = 0; l < PM_MAP_BLOCK; ++l)
+                if (mm[l])
+                    pm_index(st, p, map, j + (uint)l, c++, indices);
         }
         ar += select((float8)(0.0f), vload8(0, map + PM_MAP_R * stride + j), m);
         ag += select((float8)(0.0f), vload8(0, map + PM_MAP_G * stride + j), m);
