@@ -4,11 +4,13 @@
 #   make bench  install the benchmarks' peers (Embree), run the benchmarks
 #               (bench/results/streams.json, raytrace.json, knn.json, photonmap.json)
 #   make asan   the suite again in an ASan+UBSan build of the host code
+#   make sweep  (optional) every CLI over every file of Debian's
+#               assimp-testmodels, installed when missing (tools/sweep_models.py)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 MESON_FLAGS ?=
 
-.PHONY: all deps build demo test bench asan install clean
+.PHONY: all deps build demo test bench asan sweep install clean
 
 all: build
 
@@ -48,6 +50,14 @@ asan: deps $(ASAN_BUILD)/build.ninja
 	LSAN_OPTIONS=suppressions=$(CURDIR)/tools/lsan.supp:print_suppressions=0 \
 	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	    ctest --test-dir $(ASAN_BUILD) --output-on-failure
+
+# Not part of `make test`: about 600 files, a few minutes with the renderers.
+SWEEP_FLAGS ?=
+sweep: build
+	@dpkg-query -W -f='$${Status}' assimp-testmodels 2>/dev/null | grep -q "install ok installed" || \
+	    { if [ "$$(id -u)" = 0 ]; then apt-get install -y -q assimp-testmodels; \
+	      else sudo apt-get install -y -q assimp-testmodels; fi; }
+	python3 tools/sweep_models.py --build $(BUILD) $(SWEEP_FLAGS)
 
 install: build
 	meson install -C $(BUILD)
