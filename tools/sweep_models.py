@@ -8,6 +8,9 @@ broken on purpose) and classifies each run:
   clean error   non-zero exit with a message on stderr naming the file
   crash         killed by a signal, or a sanitizer report on stderr
   hang          still running after --timeout seconds
+  oom           stopped by the sweep's address-space limit (--mem-mb): the
+                message says bad_alloc or out of memory; without the limit
+                such a file takes the machine's memory (and then some time)
   silent        exit 0 without the expected output, or a non-zero exit whose
                 message does not name the file
 
@@ -17,8 +20,8 @@ Usage: tools/sweep_models.py [--build DIR] [--cli scene,raytrace,photonmap]
 The renderers only get the files sluice-scene loads (the same loader decides
 for all three; a file it refuses is refused by them too, which the sweep
 checks on a sample of them). Per-run results go to OUT/sweep-<cli>.tsv, the
-summary to stdout; the exit status is 1 when any run crashed, hung or failed
-silently. Not part of `make test`: `make sweep` runs it.
+summary to stdout; the exit status is 1 when any run crashed, hung, ran out of
+memory or failed silently. Not part of `make test`: `make sweep` runs it.
 """
 import argparse
 import concurrent.futures
@@ -31,7 +34,9 @@ import sys
 import tempfile
 
 SANITIZER = re.compile(r"AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitizer|runtime error:")
-CLASSES = ["loaded", "clean error", "crash", "hang", "silent"]
+CLASSES = ["loaded", "clean error", "crash", "hang", "oom", "silent"]
+BAD = ("crash", "hang", "oom", "silent")
+OOM = re.compile(r"bad_alloc|out of memory", re.I)
 
 
 def model_files(root):
@@ -95,6 +100,8 @@ def run_one(cli, build, path, timeout, mem_mb, tmpdir):
         if os.path.exists(image):
             os.unlink(image)
         return ("loaded", "") if ok else ("silent", "exit 0 without the expected output")
+    if OOM.search(err):
+        return "oom", first.strip()[:300]
     named = os.path.basename(path) in err
     return ("clean error" if named else "silent"), first.strip()[:300]
 
@@ -118,7 +125,7 @@ def sweep(cli, build, files, args, tmpdir):
         "%d %s" % (counts[c], c) for c in CLASSES)))
     for path in sorted(results):
         cls, note = results[path]
-        if cls in ("crash", "hang", "silent"):
+        if cls in BAD:
             print("  %-6s %s: %s" % (cls, path, note))
     sys.stdout.flush()
     return results
@@ -157,7 +164,7 @@ def main():
             res = sweep(cli, args.build, todo, args, tmpdir)
             if cli == "scene":
                 scene_results = res
-            bad += sum(1 for c, _ in res.values() if c in ("crash", "hang", "silent"))
+            bad += sum(1 for c, _ in res.values() if c in BAD)
     return 1 if bad else 0
 
 
