@@ -45,6 +45,7 @@ struct sr_scene_builder {
     size_t warnings_len, warning_count;
     sr_scene_warning_fn warn_fn;
     void *warn_user;
+    size_t max_triangles; /* the caller's limit; 0: MAX_ELEMENTS */
     int finished;
 };
 
@@ -220,6 +221,12 @@ sluice_status sr_scene_builder_create(const char *source, sr_scene_builder **out
     b->render = sr_render_settings_default();
     *out = b;
     return SLUICE_OK;
+}
+
+void sr_scene_builder_set_max_triangles(sr_scene_builder *b, size_t max_triangles)
+{
+    if (b)
+        b->max_triangles = max_triangles;
 }
 
 void sr_scene_builder_destroy(sr_scene_builder *b)
@@ -477,6 +484,11 @@ sluice_status sr_scene_builder_add_mesh(sr_scene_builder *b, const sr_mesh_desc 
         b->triangle_count + nt > MAX_ELEMENTS) {
         sr_set_error(err, err_size, "%s: %s: the scene would exceed %zu vertices or triangles",
                      b->source, src, MAX_ELEMENTS);
+        return SLUICE_ERROR_LIMIT;
+    }
+    if (b->max_triangles && b->triangle_count + nt > b->max_triangles) {
+        sr_set_error(err, err_size, "%s: %s: the scene would exceed the limit of %zu triangles",
+                     b->source, src, b->max_triangles);
         return SLUICE_ERROR_LIMIT;
     }
     /* 1. inputs: finite positions and normals, indices and materials in range */
