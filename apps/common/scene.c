@@ -588,7 +588,10 @@ sluice_status sr_scene_builder_add_mesh(sr_scene_builder *b, const sr_mesh_desc 
     if (ok && need_normals) {
         int fresh = b->normals == NULL;
         ok = reserve((void **)&b->normals, &b->normal_cap, nvf, sizeof(float));
-        if (ok && fresh) /* earlier meshes had no normals: zero means "none" */
+        /* earlier meshes had no normals: zero means "none". With nothing
+         * kept yet (a first mesh of degenerate triangles only) reserve had
+         * nothing to allocate and b->normals is still NULL. */
+        if (ok && fresh && b->normals)
             memset(b->normals, 0, 3 * b->vertex_count * sizeof(float));
     }
     ok = ok && reserve((void **)&b->indices, &b->index_cap, 3 * (b->triangle_count + kept_t),

@@ -405,31 +405,10 @@ static sluice_status import_scene(const mesh_source *src, const char *label,
                                   const struct aiScene **out, char *err, size_t err_size)
 {
     *out = NULL;
-    unsigned char *head = NULL;
-    const unsigned char *h = src->data;
-    size_t head_len = src->size, size = src->size;
-    sluice_status st = SLUICE_OK;
-    if (src->path) {
-        /* assimp's "Unable to open file" does not say why; ask the system */
-        h = head = malloc(SR_MESH_GUARD_HEAD_BYTES);
-        st = head ? sr_mesh_guard_file(src->path, label, head, &head_len, &size, err, err_size)
-                  : SLUICE_ERROR_OUT_OF_MEMORY;
-        if (!head)
-            sr_set_error(err, err_size, "%s: out of memory", label);
-    } else if (size == 0) {
-        sr_set_error(err, err_size, "%s: the buffer is empty", label);
-        st = SLUICE_ERROR_IO;
-    } else if (size > SR_MESH_MAX_FILE_BYTES) {
-        sr_set_error(err, err_size, "%s: %zu bytes, larger than the %u MiB a mesh file may have",
-                     label, size, SR_MESH_MAX_FILE_BYTES >> 20);
-        st = SLUICE_ERROR_LIMIT;
-    }
-    if (st == SLUICE_OK) {
-        if (head_len > SR_MESH_GUARD_HEAD_BYTES)
-            head_len = SR_MESH_GUARD_HEAD_BYTES;
-        st = sr_mesh_guard_header(h, head_len, size, label, err, err_size);
-    }
-    free(head);
+    /* assimp's "Unable to open file" does not say why: the guard does */
+    size_t size = src->size;
+    sluice_status st = src->path ? sr_mesh_guard_file(src->path, label, err, err_size)
+                                 : sr_mesh_guard_memory(src->data, size, label, err, err_size);
     if (st != SLUICE_OK)
         return st;
 

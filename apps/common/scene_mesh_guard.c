@@ -6,47 +6,9 @@
 #include <ctype.h>
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-
-sluice_status sr_mesh_guard_file(const char *path, const char *label, unsigned char *head,
-                                 size_t *head_len, size_t *size, char *err, size_t err_size)
-{
-    /* open first, then fstat: no window in which the path could change */
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        int e = errno;
-        sr_set_error(err, err_size, "%s: cannot open: %s", label,
-                     e == ENOENT ? "no such file" : strerror(e));
-        return e == ENOENT ? SLUICE_ERROR_NOT_FOUND : SLUICE_ERROR_IO;
-    }
-    struct stat s;
-    sluice_status st = SLUICE_OK;
-    if (fstat(fileno(f), &s) != 0) {
-        sr_set_error(err, err_size, "%s: cannot open: %s", label, strerror(errno));
-        st = SLUICE_ERROR_IO;
-    } else if (!S_ISREG(s.st_mode)) {
-        sr_set_error(err, err_size, "%s: not a regular file", label);
-        st = SLUICE_ERROR_IO;
-    } else if (s.st_size == 0) {
-        sr_set_error(err, err_size, "%s: the file is empty", label);
-        st = SLUICE_ERROR_IO;
-    } else if ((unsigned long long)s.st_size > SR_MESH_MAX_FILE_BYTES) {
-        sr_set_error(err, err_size, "%s: %lld bytes, larger than the %u MiB a mesh file may have",
-                     label, (long long)s.st_size, SR_MESH_MAX_FILE_BYTES >> 20);
-        st = SLUICE_ERROR_LIMIT;
-    }
-    if (st == SLUICE_OK) {
-        *size = (size_t)s.st_size;
-        *head_len = fread(head, 1, SR_MESH_GUARD_HEAD_BYTES, f);
-        if (*head_len == 0) {
-            sr_set_error(err, err_size, "%s: read error", label);
-            st = SLUICE_ERROR_IO;
-        }
-    }
-    fclose(f);
-    return st;
-}
 
 /* A cursor over the head, which ends without a NUL. */
 typedef struct cursor {
@@ -66,6 +28,13 @@ static void skip_blank(cursor *c)
             break;
         }
     }
+}
+
+/* Skips to the start of the next line. */
+static void skip_line(cursor *c)
+{
+    while (c->p < c->end && *c->p != '\n')
+        c->p++;
 }
 
 /* Copies the next token (cut to `n` - 1 bytes) into `tok`. */
@@ -120,60 +89,335 @@ static sluice_status check_off(cursor c, size_t size, const char *label, char *e
     return SLUICE_OK;
 }
 
-/* PLY: the header must end (end_header) within SR_MESH_GUARD_HEAD_BYTES
- * and be text: assimp 5.2's PLY parser loops forever on a header that ends
- * without it or holds a NUL. Every instance of an element takes at least
- * one byte (a line in ASCII, a property in binary). */
-static sluice_status check_ply(cursor c, size_t size, const char *label, char *err, size_t err_size)
+/* The bytes after the header, from memory or a file (read in blocks). */
+typedef struct body {
+    const unsigned char *mem; /* the whole data, or NULL: read `f` */
+    FILE *f;
+    size_t pos, size; /* offsets in the whole data */
+    unsigned char block[4096];
+    size_t block_pos, block_len;
+} body;
+
+/* Reads n <= 8 bytes at the current position; 0 past the end. */
+static int body_read(body *b, unsigned char *out, size_t n)
 {
-    char tok[32];
-    token(&c, tok, sizeof tok);
-    if (strcmp(tok, "ply") != 0 && strcmp(tok, "PLY") != 0)
-        return SLUICE_OK;
-    unsigned long long total = 0;
-    int ended = 0;
-    for (const unsigned char *q = c.p; q < c.end && !ended; ++q) {
-        if (*q == 0 || (*q < 32 && !isspace(*q)) || *q == 127) {
-            sr_set_error(err, err_size, "%s: the PLY header holds a control character (byte %zu)",
-                         label, (size_t)(q - c.start));
-            return SLUICE_ERROR_IO;
+    if (n > b->size - b->pos)
+        return 0;
+    if (b->mem) {
+        memcpy(out, b->mem + b->pos, n);
+    } else {
+        if (b->pos < b->block_pos || b->pos + n > b->block_pos + b->block_len) {
+            if (fseek(b->f, (long)b->pos, SEEK_SET) != 0)
+                return 0;
+            b->block_pos = b->pos;
+            b->block_len = fread(b->block, 1, sizeof b->block, b->f);
+            if (b->block_len < n)
+                return 0;
         }
-        ended = (size_t)(c.end - q) >= 10 && memcmp(q, "end_header", 10) == 0;
+        memcpy(out, b->block + (b->pos - b->block_pos), n);
     }
-    if (!ended) {
-        sr_set_error(err, err_size, "%s: the PLY header has no end_header in its first %u bytes",
-                     label, SR_MESH_GUARD_HEAD_BYTES);
-        return SLUICE_ERROR_IO;
+    b->pos += n;
+    return 1;
+}
+
+static int body_skip(body *b, unsigned long long n)
+{
+    if (n > b->size - b->pos)
+        return 0;
+    b->pos += (size_t)n;
+    return 1;
+}
+
+/* Size in bytes of a PLY scalar type (the names assimp knows), 0 if none. */
+static unsigned ply_type_size(const char *t)
+{
+    static const char *const names[] = {"char",  "uchar",   "int8",   "uint8",  "short", "ushort",
+                                        "int16", "uint16",  "int",    "uint",   "int32", "uint32",
+                                        "float", "float32", "double", "float64"};
+    static const unsigned sizes[] = {1, 1, 1, 1, 2, 2, 2, 2, 4, 4, 4, 4, 4, 4, 8, 8};
+    for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) {
+        if (strcmp(t, names[i]) == 0)
+            return sizes[i];
     }
-    while (c.p < c.end) {
-        token(&c, tok, sizeof tok);
-        if (strcmp(tok, "end_header") == 0)
-            break;
-        if (strcmp(tok, "element") != 0)
-            continue;
-        char name[32];
-        unsigned long long n = 0;
-        token(&c, name, sizeof name);
-        if (!number(&c, &n))
-            continue;
-        total += n;
-        if (n > size || total > size) {
-            sr_set_error(err, err_size,
-                         "%s: the PLY header declares %llu '%s' elements, more than a file of "
-                         "%zu bytes holds",
-                         label, n, name, size);
-            return SLUICE_ERROR_LIMIT;
+    return 0;
+}
+
+#define PLY_MAX_ELEMENTS 64
+#define PLY_MAX_PROPERTIES 256
+
+typedef struct ply_property {
+    unsigned count_size; /* 0: a scalar of item_size bytes; else a list's count */
+    int count_signed;
+    unsigned item_size;
+} ply_property;
+
+typedef struct ply_element {
+    char name[32];
+    unsigned long long count;
+    unsigned first, properties;
+} ply_element;
+
+/* Walks a binary PLY's data as its header describes it: assimp 5.2 reads
+ * binary PLY data without checking where it ends, so a list count or an
+ * element count larger than the data makes it read past its buffer. */
+static sluice_status walk_binary_ply(body *b, int big_endian, const ply_element *el, size_t ne,
+                                     const ply_property *pr, const char *label, char *err,
+                                     size_t err_size)
+{
+    for (size_t e = 0; e < ne; ++e) {
+        for (unsigned long long i = 0; i < el[e].count; ++i) {
+            for (unsigned k = el[e].first; k < el[e].first + el[e].properties; ++k) {
+                int ok;
+                if (!pr[k].count_size) {
+                    ok = body_skip(b, pr[k].item_size);
+                } else {
+                    unsigned char c[8];
+                    ok = body_read(b, c, pr[k].count_size);
+                    unsigned long long n = 0;
+                    for (unsigned j = 0; ok && j < pr[k].count_size; ++j)
+                        n = n << 8 | c[big_endian ? j : pr[k].count_size - 1 - j];
+                    int negative =
+                        pr[k].count_signed && (c[big_endian ? 0 : pr[k].count_size - 1] & 0x80);
+                    if (ok && negative) {
+                        sr_set_error(err, err_size,
+                                     "%s: PLY element '%s' %llu: a list with a negative count",
+                                     label, el[e].name, i);
+                        return SLUICE_ERROR_IO;
+                    }
+                    ok = ok && body_skip(b, n * pr[k].item_size);
+                }
+                if (!ok) {
+                    sr_set_error(err, err_size,
+                                 "%s: the binary PLY data ends within element '%s' %llu of %llu",
+                                 label, el[e].name, i, el[e].count);
+                    return SLUICE_ERROR_IO;
+                }
+            }
         }
     }
     return SLUICE_OK;
 }
 
-sluice_status sr_mesh_guard_header(const unsigned char *head, size_t head_len, size_t size,
-                                   const char *label, char *err, size_t err_size)
+/* PLY: the header must end (end_header) within SR_MESH_GUARD_HEAD_BYTES
+ * and be text: assimp 5.2's PLY parser loops forever on a header that ends
+ * without it or holds a NUL. Property types must be ones assimp knows.
+ * Every element instance takes at least one byte (a line in ASCII, a
+ * property in binary); binary data is walked to its end (walk_binary_ply). */
+static sluice_status check_ply(cursor c, body *b, const char *label, char *err, size_t err_size)
+{
+    /* assimp takes any data that starts with "ply" in any case for PLY */
+    if (c.end - c.p < 3 || tolower(c.p[0]) != 'p' || tolower(c.p[1]) != 'l' ||
+        tolower(c.p[2]) != 'y')
+        return SLUICE_OK;
+    /* the header ends at a line that starts with end_header */
+    const unsigned char *end_header = NULL;
+    int line_start = 1;
+    for (const unsigned char *q = c.p; q < c.end && !end_header; ++q) {
+        if ((*q < 32 && !isspace(*q)) || *q >= 127) {
+            sr_set_error(err, err_size,
+                         "%s: the PLY header holds a byte that is not ASCII text (byte %zu)", label,
+                         (size_t)(q - c.start));
+            return SLUICE_ERROR_IO;
+        }
+        if (line_start && (size_t)(c.end - q) >= 10 && memcmp(q, "end_header", 10) == 0)
+            end_header = q;
+        line_start = *q == '\n' || (line_start && (*q == ' ' || *q == '\t'));
+    }
+    if (!end_header) {
+        sr_set_error(err, err_size,
+                     "%s: the PLY header has no end_header line in its first %u bytes", label,
+                     SR_MESH_GUARD_HEAD_BYTES);
+        return SLUICE_ERROR_IO;
+    }
+    char tok[32];
+    skip_line(&c); /* "ply" */
+    static const ply_element no_element;
+    ply_element el[PLY_MAX_ELEMENTS];
+    ply_property pr[PLY_MAX_PROPERTIES];
+    size_t ne = 0, np = 0;
+    int format = 0, binary = 0, big_endian = 0;
+    unsigned long long total = 0;
+    c.end = end_header;
+    while (c.p < c.end) {
+        token(&c, tok, sizeof tok);
+        if (!tok[0])
+            break;
+        if (strcmp(tok, "format") == 0) {
+            token(&c, tok, sizeof tok);
+            binary = strncmp(tok, "binary_", 7) == 0;
+            big_endian = strcmp(tok, "binary_big_endian") == 0;
+            if (format++ || (strcmp(tok, "ascii") != 0 &&
+                             strcmp(tok, "binary_little_endian") != 0 && !big_endian)) {
+                sr_set_error(err, err_size, "%s: PLY format '%s' %s", label, tok,
+                             format > 1 ? "given twice" : "unknown");
+                return SLUICE_ERROR_IO;
+            }
+            skip_line(&c);
+        } else if (strcmp(tok, "comment") == 0 || strcmp(tok, "obj_info") == 0) {
+            skip_line(&c);
+        } else if (strcmp(tok, "element") == 0) {
+            if (ne == PLY_MAX_ELEMENTS) {
+                sr_set_error(err, err_size, "%s: more than %d PLY elements", label,
+                             PLY_MAX_ELEMENTS);
+                return SLUICE_ERROR_LIMIT;
+            }
+            ply_element *e = &el[ne++];
+            *e = no_element;
+            e->first = (unsigned)np;
+            token(&c, e->name, sizeof e->name);
+            if (!number(&c, &e->count)) {
+                sr_set_error(err, err_size, "%s: PLY element '%s' without a count", label, e->name);
+                return SLUICE_ERROR_IO;
+            }
+            total += e->count;
+            if (e->count > b->size || total > b->size) {
+                sr_set_error(err, err_size,
+                             "%s: the PLY header declares %llu '%s' elements, more than a file "
+                             "of %zu bytes holds",
+                             label, e->count, e->name, b->size);
+                return SLUICE_ERROR_LIMIT;
+            }
+            skip_line(&c);
+        } else if (strcmp(tok, "property") == 0) {
+            if (!ne || np == PLY_MAX_PROPERTIES) {
+                sr_set_error(err, err_size, "%s: %s", label,
+                             ne ? "more than 256 PLY properties"
+                                : "a PLY property outside any element");
+                return ne ? SLUICE_ERROR_LIMIT : SLUICE_ERROR_IO;
+            }
+            ply_property *p = &pr[np++];
+            el[ne - 1].properties++;
+            token(&c, tok, sizeof tok);
+            p->count_size = 0;
+            p->count_signed = 0;
+            if (strcmp(tok, "list") == 0) {
+                token(&c, tok, sizeof tok);
+                p->count_size = ply_type_size(tok);
+                p->count_signed = tok[0] != 'u';
+                if (p->count_size && (strncmp(tok, "float", 5) == 0 || strcmp(tok, "double") == 0))
+                    p->count_size = 0; /* a list counted by a float */
+                if (!p->count_size) {
+                    sr_set_error(err, err_size, "%s: PLY list count type '%s' is not an integer",
+                                 label, tok);
+                    return SLUICE_ERROR_IO;
+                }
+                token(&c, tok, sizeof tok);
+            }
+            p->item_size = ply_type_size(tok);
+            if (!p->item_size) {
+                sr_set_error(err, err_size, "%s: unknown PLY property type '%s'", label, tok);
+                return SLUICE_ERROR_IO;
+            }
+            skip_line(&c); /* the property's name */
+        } else {
+            skip_line(&c); /* free text: Blender writes "Created by ..." */
+        }
+    }
+    if (!format) {
+        sr_set_error(err, err_size, "%s: the PLY header has no format line", label);
+        return SLUICE_ERROR_IO;
+    }
+    if (!binary)
+        return SLUICE_OK;
+    /* the data starts after the end_header line ("\n" or "\r\n") */
+    size_t at = (size_t)(end_header - c.start) + 10;
+    unsigned char ch = 0;
+    b->pos = at;
+    if (body_read(b, &ch, 1) && ch == '\r') {
+        at++;
+        ch = 0;
+        body_read(b, &ch, 1);
+    }
+    b->pos = at + (ch == '\n');
+    return walk_binary_ply(b, big_endian, el, ne, pr, label, err, err_size);
+}
+
+/* The checks on the data's first bytes (`head`) and the rest (`b`). */
+static sluice_status check_header(const unsigned char *head, size_t head_len, body *b,
+                                  const char *label, char *err, size_t err_size)
 {
     cursor c = {head, head, head + head_len};
-    sluice_status st = check_off(c, size, label, err, err_size);
+    sluice_status st = check_off(c, b->size, label, err, err_size);
     if (st == SLUICE_OK)
-        st = check_ply(c, size, label, err, err_size);
+        st = check_ply(c, b, label, err, err_size);
+    return st;
+}
+
+sluice_status sr_mesh_guard_file(const char *path, const char *label, char *err, size_t err_size)
+{
+    /* open first, then fstat: no window in which the path could change */
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        int e = errno;
+        sr_set_error(err, err_size, "%s: cannot open: %s", label,
+                     e == ENOENT ? "no such file" : strerror(e));
+        return e == ENOENT ? SLUICE_ERROR_NOT_FOUND : SLUICE_ERROR_IO;
+    }
+    struct stat s;
+    sluice_status st = SLUICE_OK;
+    if (fstat(fileno(f), &s) != 0) {
+        sr_set_error(err, err_size, "%s: cannot open: %s", label, strerror(errno));
+        st = SLUICE_ERROR_IO;
+    } else if (!S_ISREG(s.st_mode)) {
+        sr_set_error(err, err_size, "%s: not a regular file", label);
+        st = SLUICE_ERROR_IO;
+    } else if (s.st_size == 0) {
+        sr_set_error(err, err_size, "%s: the file is empty", label);
+        st = SLUICE_ERROR_IO;
+    } else if ((unsigned long long)s.st_size > SR_MESH_MAX_FILE_BYTES) {
+        sr_set_error(err, err_size, "%s: %lld bytes, larger than the %u MiB a mesh file may have",
+                     label, (long long)s.st_size, SR_MESH_MAX_FILE_BYTES >> 20);
+        st = SLUICE_ERROR_LIMIT;
+    }
+    unsigned char *head = NULL;
+    body *b = NULL;
+    if (st == SLUICE_OK) {
+        head = malloc(SR_MESH_GUARD_HEAD_BYTES);
+        b = calloc(1, sizeof *b);
+        if (!head || !b) {
+            sr_set_error(err, err_size, "%s: out of memory", label);
+            st = SLUICE_ERROR_OUT_OF_MEMORY;
+        }
+    }
+    if (st == SLUICE_OK) {
+        size_t n = fread(head, 1, SR_MESH_GUARD_HEAD_BYTES, f);
+        b->f = f;
+        b->size = (size_t)s.st_size;
+        if (n == 0) {
+            sr_set_error(err, err_size, "%s: read error", label);
+            st = SLUICE_ERROR_IO;
+        } else {
+            st = check_header(head, n, b, label, err, err_size);
+        }
+    }
+    free(head);
+    free(b);
+    fclose(f);
+    return st;
+}
+
+sluice_status sr_mesh_guard_memory(const void *data, size_t size, const char *label, char *err,
+                                   size_t err_size)
+{
+    if (size == 0) {
+        sr_set_error(err, err_size, "%s: the data is empty", label);
+        return SLUICE_ERROR_IO;
+    }
+    if (size > SR_MESH_MAX_FILE_BYTES) {
+        sr_set_error(err, err_size, "%s: %zu bytes, larger than the %u MiB a mesh file may have",
+                     label, size, SR_MESH_MAX_FILE_BYTES >> 20);
+        return SLUICE_ERROR_LIMIT;
+    }
+    body *b = calloc(1, sizeof *b);
+    if (!b) {
+        sr_set_error(err, err_size, "%s: out of memory", label);
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    b->mem = data;
+    b->size = size;
+    sluice_status st =
+        check_header(data, size < SR_MESH_GUARD_HEAD_BYTES ? size : SR_MESH_GUARD_HEAD_BYTES, b,
+                     label, err, err_size);
+    free(b);
     return st;
 }

@@ -13,22 +13,20 @@
 
 #include <stddef.h>
 
-/* How much of the file's start sr_mesh_guard_header looks at. */
+/* How much of the file's start the header checks look at: a PLY header
+ * must end within it. */
 #define SR_MESH_GUARD_HEAD_BYTES 65536u
 
-/* Opens `path` and checks it is a regular file (not a directory, FIFO or
- * device, which assimp would read forever or not at all) of 1 to
- * SR_MESH_MAX_FILE_BYTES bytes; then reads its first bytes into `head`
- * (SR_MESH_GUARD_HEAD_BYTES of room), their number into `*head_len` and the
- * file's size into `*size`. NOT_FOUND, IO or LIMIT, naming `label`. */
-sluice_status sr_mesh_guard_file(const char *path, const char *label, unsigned char *head,
-                                 size_t *head_len, size_t *size, char *err, size_t err_size);
+/* Checks the file at `path` before assimp reads it: a regular file (not a
+ * directory, FIFO or device, which assimp would read forever or not at
+ * all) of 1 to SR_MESH_MAX_FILE_BYTES bytes; an OFF or PLY header that
+ * declares no more elements than the file's size holds; a PLY header that
+ * ends and names known types; binary PLY data that holds what its header
+ * says. NOT_FOUND, IO or LIMIT, naming `label`. */
+sluice_status sr_mesh_guard_file(const char *path, const char *label, char *err, size_t err_size);
 
-/* Checks the counts a file's header declares (OFF: vertices and faces; PLY:
- * every element) against what `size` bytes can hold. `head` is the file's
- * first `head_len` bytes. Files in other formats pass. LIMIT, naming
- * `label`, the count and the size. */
-sluice_status sr_mesh_guard_header(const unsigned char *head, size_t head_len, size_t size,
-                                   const char *label, char *err, size_t err_size);
+/* The same checks for `size` bytes at `data`. */
+sluice_status sr_mesh_guard_memory(const void *data, size_t size, const char *label, char *err,
+                                   size_t err_size);
 
 #endif /* SR_APPS_SCENE_MESH_GUARD_H */

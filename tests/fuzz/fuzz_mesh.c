@@ -3,6 +3,7 @@
  * format hint assimp gets, the rest is the file. Each input must end in a
  * scene or a clean error; crashes, sanitizer reports, leaks, timeouts and
  * out-of-memory are the findings. Built by `make fuzz` (tests/fuzz/README.md). */
+#include "live_scenes.h"
 #include "scene.h"
 
 #include <stddef.h>
@@ -41,5 +42,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         __builtin_trap();
     }
     sr_scene_builder_destroy(b);
+    if (fuzz_live_scenes != 0)
+        __builtin_trap(); /* an assimp scene was not released */
     return 0;
 }

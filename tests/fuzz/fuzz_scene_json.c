@@ -1,11 +1,13 @@
 /* libFuzzer harness for the JSON scene loader (sr_scene_load_json): each
  * input is written to scene.json in a private directory whose meshes/ links
- * to the repository's scenes/meshes, so the seeds' mesh references resolve
- * and the JSON-to-mesh path is fuzzed too. Each input must end in a scene or
+ * to tests/fuzz/seeds/mesh (tiny files in each format docs/scenes.md names),
+ * so the seeds' mesh references resolve and the JSON-to-mesh path is fuzzed
+ * too. Each input must end in a scene or
  * a clean error naming the file; crashes, sanitizer reports, leaks, timeouts
  * and out-of-memory are the findings. Built by `make fuzz`
  * (tests/fuzz/README.md); SCENE_SOURCE_ROOT is the repository. */
 #define _POSIX_C_SOURCE 200809L
+#include "live_scenes.h"
 #include "scene.h"
 
 #include <stdint.h>
@@ -35,7 +37,7 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     }
     char link[480];
     snprintf(link, sizeof link, "%s/meshes", dir);
-    if (symlink(SCENE_SOURCE_ROOT "/scenes/meshes", link) != 0) {
+    if (symlink(SCENE_SOURCE_ROOT "/tests/fuzz/seeds/mesh", link) != 0) {
         perror("symlink");
         exit(1);
     }
@@ -65,5 +67,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         /* every failure must name the file */
         __builtin_trap();
     }
+    if (fuzz_live_scenes != 0)
+        __builtin_trap(); /* an assimp scene was not released */
     return 0;
 }
