@@ -391,6 +391,23 @@ static sluice_status check_structure(const struct aiScene *sc, const char *label
     return SLUICE_OK;
 }
 
+/* Fails unless some mesh has a face of 3 or more corners. SortByPType would
+ * drop every mesh of a file of points and lines, aiApplyPostProcessing would
+ * fail with "No meshes remaining", and on that failure assimp 5.2's C API
+ * releases the scene through an importer it has already destroyed (a crash
+ * in Importer::~Importer): no post-processing step may fail. */
+static sluice_status check_surfaces(const struct aiScene *sc, const char *label, char *err,
+                                    size_t err_size)
+{
+    for (unsigned mi = 0; mi < sc->mNumMeshes; ++mi) {
+        if (sc->mMeshes[mi]->mPrimitiveTypes & (aiPrimitiveType_TRIANGLE | aiPrimitiveType_POLYGON))
+            return SLUICE_OK;
+    }
+    sr_set_error(err, err_size, "%s: the file has no triangles or polygons%s", label,
+                 sc->mNumMeshes ? " (only points or lines)" : "");
+    return SLUICE_ERROR_IO;
+}
+
 /* Where the mesh comes from: a file (path) or a buffer (data, size, hint). */
 typedef struct mesh_source {
     const char *path;
@@ -439,6 +456,8 @@ static sluice_status import_scene(const mesh_source *src, const char *label,
         return SLUICE_ERROR_IO;
     }
     st = check_structure(sc, label, err, err_size);
+    if (st == SLUICE_OK)
+        st = check_surfaces(sc, label, err, err_size);
     if (st == SLUICE_OK)
         st = check_finite(sc, label, err, err_size);
     if (st != SLUICE_OK) {
