@@ -198,9 +198,10 @@ static sluice_status walk_binary_ply(body *b, int big_endian, const ply_element 
     return SLUICE_OK;
 }
 
-/* PLY: the header must end (end_header) within SR_MESH_GUARD_HEAD_BYTES
- * and be text: assimp 5.2's PLY parser loops forever on a header that ends
- * without it or holds a NUL. Property types must be ones assimp knows.
+/* PLY: the header must end (an end_header line) within
+ * SR_MESH_GUARD_HEAD_BYTES and be printable text, tabs and line ends:
+ * assimp 5.2's PLY parser loops forever on a header without that line (a
+ * NUL, a vertical tab or a missing newline hide it). Property types must be ones assimp knows.
  * Every element instance takes at least one byte (a line in ASCII, a
  * property in binary); binary data is walked to its end (walk_binary_ply). */
 static sluice_status check_ply(cursor c, body *b, const char *label, char *err, size_t err_size)
@@ -213,14 +214,21 @@ static sluice_status check_ply(cursor c, body *b, const char *label, char *err, 
     const unsigned char *end_header = NULL;
     int line_start = 1;
     for (const unsigned char *q = c.p; q < c.end && !end_header; ++q) {
-        if ((*q < 32 && !isspace(*q)) || *q >= 127) {
+        if ((*q < 32 && *q != '\t' && *q != '\r' && *q != '\n') || *q >= 127) {
             sr_set_error(err, err_size,
-                         "%s: the PLY header holds a byte that is not ASCII text (byte %zu)", label,
+                         "%s: the PLY header holds a control or non-ASCII byte (byte %zu)", label,
                          (size_t)(q - c.start));
             return SLUICE_ERROR_IO;
         }
-        if (line_start && (size_t)(c.end - q) >= 10 && memcmp(q, "end_header", 10) == 0)
-            end_header = q;
+        if (line_start && (size_t)(c.end - q) >= 10 && memcmp(q, "end_header", 10) == 0) {
+            /* assimp's line ends at \r or \n; anything else on the line
+             * makes it read past the header looking for end_header */
+            const unsigned char *r = q + 10;
+            while (r < c.end && (*r == ' ' || *r == '\t'))
+                r++;
+            if (r < c.end && (*r == '\r' || *r == '\n'))
+                end_header = q;
+        }
         line_start = *q == '\n' || (line_start && (*q == ' ' || *q == '\t'));
     }
     if (!end_header) {
