@@ -424,8 +424,9 @@ static sluice_status import_scene(const mesh_source *src, const char *label,
     *out = NULL;
     /* assimp's "Unable to open file" does not say why: the guard does */
     size_t size = src->size;
-    sluice_status st = src->path ? sr_mesh_guard_file(src->path, label, err, err_size)
-                                 : sr_mesh_guard_memory(src->data, size, label, err, err_size);
+    sluice_status st = src->path
+                           ? sr_mesh_guard_file(src->path, label, err, err_size)
+                           : sr_mesh_guard_memory(src->data, size, src->hint, label, err, err_size);
     if (st != SLUICE_OK)
         return st;
 

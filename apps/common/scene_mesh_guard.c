@@ -340,14 +340,52 @@ static sluice_status check_ply(cursor c, body *b, const char *label, char *err, 
     return walk_binary_ply(b, big_endian, el, ne, pr, label, err, err_size);
 }
 
+/* OBJ is text: assimp 5.2's OBJ parser reads past its buffer on a NUL
+ * byte in a usemtl line (it takes NUL for the end of the data). */
+static sluice_status check_text(body *b, const char *label, char *err, size_t err_size)
+{
+    const unsigned char *nul = NULL;
+    size_t at = 0;
+    if (b->mem) {
+        nul = memchr(b->mem, 0, b->size);
+        at = nul ? (size_t)(nul - b->mem) : 0;
+    } else if (fseek(b->f, 0, SEEK_SET) == 0) {
+        size_t n;
+        while (!nul && (n = fread(b->block, 1, sizeof b->block, b->f)) > 0) {
+            nul = memchr(b->block, 0, n);
+            at += nul ? (size_t)(nul - b->block) : n;
+        }
+    }
+    if (nul) {
+        sr_set_error(err, err_size, "%s: an OBJ file is text, but byte %zu is NUL", label, at);
+        return SLUICE_ERROR_IO;
+    }
+    return SLUICE_OK;
+}
+
+/* Non-zero when `ext` (a file extension or format hint) is `want`, in any
+ * case. */
+static int is_format(const char *ext, const char *want)
+{
+    if (!ext)
+        return 0;
+    for (; *ext && *want; ++ext, ++want) {
+        if (tolower((unsigned char)*ext) != *want)
+            return 0;
+    }
+    return !*ext && !*want;
+}
+
 /* The checks on the data's first bytes (`head`) and the rest (`b`). */
 static sluice_status check_header(const unsigned char *head, size_t head_len, body *b,
-                                  const char *label, char *err, size_t err_size)
+                                  const char *ext, const char *label, char *err, size_t err_size)
 {
     cursor c = {head, head, head + head_len};
     sluice_status st = check_off(c, b->size, label, err, err_size);
     if (st == SLUICE_OK)
         st = check_ply(c, b, label, err, err_size);
+    if (st == SLUICE_OK && is_format(ext, "obj"))
+        st = check_text(b, label, err, err_size);
     return st;
 }
 
@@ -395,7 +433,10 @@ sluice_status sr_mesh_guard_file(const char *path, const char *label, char *err,
             sr_set_error(err, err_size, "%s: read error", label);
             st = SLUICE_ERROR_IO;
         } else {
-            st = check_header(head, n, b, label, err, err_size);
+            const char *dot = strrchr(path, '.');
+            const char *slash = strrchr(path, '/');
+            const char *ext = dot && (!slash || dot > slash) ? dot + 1 : NULL;
+            st = check_header(head, n, b, ext, label, err, err_size);
         }
     }
     free(head);
@@ -404,8 +445,8 @@ sluice_status sr_mesh_guard_file(const char *path, const char *label, char *err,
     return st;
 }
 
-sluice_status sr_mesh_guard_memory(const void *data, size_t size, const char *label, char *err,
-                                   size_t err_size)
+sluice_status sr_mesh_guard_memory(const void *data, size_t size, const char *hint,
+                                   const char *label, char *err, size_t err_size)
 {
     if (size == 0) {
         sr_set_error(err, err_size, "%s: the data is empty", label);
@@ -425,7 +466,7 @@ sluice_status sr_mesh_guard_memory(const void *data, size_t size, const char *la
     b->size = size;
     sluice_status st =
         check_header(data, size < SR_MESH_GUARD_HEAD_BYTES ? size : SR_MESH_GUARD_HEAD_BYTES, b,
-                     label, err, err_size);
+                     hint, label, err, err_size);
     free(b);
     return st;
 }

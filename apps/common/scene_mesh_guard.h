@@ -22,11 +22,13 @@
  * all) of 1 to SR_MESH_MAX_FILE_BYTES bytes; an OFF or PLY header that
  * declares no more elements than the file's size holds; a PLY header that
  * ends and names known types; binary PLY data that holds what its header
- * says. NOT_FOUND, IO or LIMIT, naming `label`. */
+ * says; no NUL byte in an OBJ file (by its extension). NOT_FOUND, IO or
+ * LIMIT, naming `label`. */
 sluice_status sr_mesh_guard_file(const char *path, const char *label, char *err, size_t err_size);
 
-/* The same checks for `size` bytes at `data`. */
-sluice_status sr_mesh_guard_memory(const void *data, size_t size, const char *label, char *err,
-                                   size_t err_size);
+/* The same checks for `size` bytes at `data` in the format `hint` (an
+ * extension, may be NULL). */
+sluice_status sr_mesh_guard_memory(const void *data, size_t size, const char *hint,
+                                   const char *label, char *err, size_t err_size);
 
 #endif /* SR_APPS_SCENE_MESH_GUARD_H */
