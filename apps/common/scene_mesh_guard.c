@@ -340,27 +340,205 @@ static sluice_status check_ply(cursor c, body *b, const char *label, char *err, 
     return walk_binary_ply(b, big_endian, el, ne, pr, label, err, err_size);
 }
 
-/* OBJ is text: assimp 5.2's OBJ parser reads past its buffer on a NUL
- * byte in a usemtl line (it takes NUL for the end of the data). */
-static sluice_status check_text(body *b, const char *label, char *err, size_t err_size)
+/* The next byte of `b`, read from the start onwards; -1 at the end. */
+static int body_getc(body *b)
 {
-    const unsigned char *nul = NULL;
-    size_t at = 0;
-    if (b->mem) {
-        nul = memchr(b->mem, 0, b->size);
-        at = nul ? (size_t)(nul - b->mem) : 0;
-    } else if (fseek(b->f, 0, SEEK_SET) == 0) {
-        size_t n;
-        while (!nul && (n = fread(b->block, 1, sizeof b->block, b->f)) > 0) {
-            nul = memchr(b->block, 0, n);
-            at += nul ? (size_t)(nul - b->block) : n;
+    if (b->pos >= b->size)
+        return -1;
+    if (b->mem)
+        return b->mem[b->pos++];
+    if (b->pos >= b->block_pos + b->block_len) {
+        if (fseek(b->f, (long)b->pos, SEEK_SET) != 0)
+            return -1;
+        b->block_pos = b->pos;
+        b->block_len = fread(b->block, 1, sizeof b->block, b->f);
+        if (b->block_len == 0)
+            return -1;
+    }
+    return b->block[b->pos++ - b->block_pos];
+}
+
+/* Reads the next line of text into `line` (cut to `n` - 1 bytes, without
+ * its end); 0 at the end of the data, -1 at a NUL byte. */
+static int next_line(body *b, char *line, size_t n)
+{
+    size_t k = 0;
+    int ch = body_getc(b);
+    if (ch < 0)
+        return 0;
+    for (; ch >= 0 && ch != '\n'; ch = body_getc(b)) {
+        if (ch == 0)
+            return -1;
+        if (k + 1 < n)
+            line[k++] = (char)ch;
+    }
+    while (k && isspace((unsigned char)line[k - 1]))
+        k--;
+    line[k] = '\0';
+    return 1;
+}
+
+/* The statement's keyword: the line's first word (`line` is modified). */
+static char *keyword(char *line, char **rest)
+{
+    while (*line == ' ' || *line == '\t')
+        line++;
+    char *e = line;
+    while (*e && *e != ' ' && *e != '\t')
+        e++;
+    *rest = e;
+    if (*e) {
+        *e = '\0';
+        *rest = e + 1;
+        while (**rest == ' ' || **rest == '\t')
+            (*rest)++;
+    }
+    return line;
+}
+
+/* An MTL library an OBJ names: assimp 5.2's MTL parser dereferences a NULL
+ * material for a texture statement (map_Kd, bump, norm, ...) before the
+ * first newmtl, and stops at a NUL byte: only comments may come first. */
+static sluice_status check_mtl(FILE *f, const char *mtl, const char *label, char *err,
+                               size_t err_size)
+{
+    body *b = calloc(1, sizeof *b);
+    if (!b) {
+        sr_set_error(err, err_size, "%s: out of memory", label);
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    struct stat s;
+    sluice_status st = SLUICE_OK;
+    if (fstat(fileno(f), &s) != 0 || !S_ISREG(s.st_mode) ||
+        (unsigned long long)s.st_size > SR_MESH_MAX_FILE_BYTES) {
+        sr_set_error(err, err_size, "%s: MTL library %s: not a regular file of at most %u MiB",
+                     label, mtl, SR_MESH_MAX_FILE_BYTES >> 20);
+        st = SLUICE_ERROR_IO;
+    }
+    b->f = f;
+    b->size = st == SLUICE_OK ? (size_t)s.st_size : 0;
+    char line[256];
+    int r;
+    size_t no = 0;
+    while (st == SLUICE_OK && (r = next_line(b, line, sizeof line)) != 0) {
+        no++;
+        if (r < 0) {
+            sr_set_error(err, err_size, "%s: MTL library %s: line %zu holds a NUL byte", label, mtl,
+                         no);
+            st = SLUICE_ERROR_IO;
+            break;
+        }
+        char *rest;
+        const char *kw = keyword(line, &rest);
+        if (strcmp(kw, "newmtl") == 0)
+            break;
+        if (*kw && *kw != '#') {
+            sr_set_error(err, err_size,
+                         "%s: MTL library %s: line %zu: '%s' before the first newmtl", label, mtl,
+                         no, kw);
+            st = SLUICE_ERROR_IO;
         }
     }
-    if (nul) {
-        sr_set_error(err, err_size, "%s: an OBJ file is text, but byte %zu is NUL", label, at);
-        return SLUICE_ERROR_IO;
+    /* after the first newmtl a NUL byte still stops assimp's parser short */
+    for (int ch; st == SLUICE_OK && (ch = body_getc(b)) >= 0;) {
+        if (ch == 0) {
+            sr_set_error(err, err_size, "%s: MTL library %s: byte %zu is NUL", label, mtl,
+                         b->pos - 1);
+            st = SLUICE_ERROR_IO;
+        }
     }
-    return SLUICE_OK;
+    free(b);
+    return st;
+}
+
+/* Opens and checks the MTL library `name` relative to `dir` ("" or ending
+ * in '/'); *found says whether it exists. */
+static sluice_status check_mtl_at(const char *dir, const char *name, int *found, const char *label,
+                                  char *err, size_t err_size)
+{
+    size_t n = strlen(dir) + strlen(name) + 1;
+    char *path = malloc(n);
+    if (!path) {
+        sr_set_error(err, err_size, "%s: out of memory", label);
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    snprintf(path, n, "%s%s", dir, name);
+    FILE *f = fopen(path, "rb");
+    *found = f != NULL;
+    sluice_status st = f ? check_mtl(f, name, label, err, err_size) : SLUICE_OK;
+    if (f)
+        fclose(f);
+    free(path);
+    return st;
+}
+
+/* OBJ is text, and its MTL libraries (mtllib) are read with it. assimp
+ * 5.2's OBJ parser reads past its buffer on a NUL byte (it takes NUL for
+ * the end of the data). When a library is missing assimp reads the OBJ's
+ * name with "mtl" for "obj" instead; from memory that name is the memory
+ * buffer's own, so the OBJ itself is read as an MTL library: OBJ data from
+ * memory may not name one. `path` is the OBJ file, or NULL for memory. */
+static sluice_status check_obj(body *b, const char *path, const char *label, char *err,
+                               size_t err_size)
+{
+    char *dir = NULL;
+    if (path) {
+        const char *slash = strrchr(path, '/');
+        size_t dl = slash ? (size_t)(slash - path) + 1 : 0;
+        dir = malloc(dl + 1);
+        if (!dir) {
+            sr_set_error(err, err_size, "%s: out of memory", label);
+            return SLUICE_ERROR_OUT_OF_MEMORY;
+        }
+        memcpy(dir, path, dl);
+        dir[dl] = '\0';
+    }
+    b->pos = 0;
+    b->block_pos = b->block_len = 0;
+    char line[1100];
+    int r, missing = 0;
+    size_t no = 0;
+    sluice_status st = SLUICE_OK;
+    while (st == SLUICE_OK && (r = next_line(b, line, sizeof line)) != 0) {
+        no++;
+        if (r < 0) {
+            sr_set_error(err, err_size, "%s: line %zu: an OBJ file is text, but holds a NUL byte",
+                         label, no);
+            st = SLUICE_ERROR_IO;
+            break;
+        }
+        char *rest;
+        if (strcmp(keyword(line, &rest), "mtllib") != 0 || !*rest)
+            continue;
+        if (!path) {
+            sr_set_error(err, err_size,
+                         "%s: line %zu: OBJ data read from memory may not name an MTL library "
+                         "(assimp would read the data itself as one)",
+                         label, no);
+            st = SLUICE_ERROR_IO;
+        } else {
+            int found = 0;
+            st = check_mtl_at(dir, rest, &found, label, err, err_size);
+            missing |= !found;
+        }
+    }
+    size_t pl = path ? strlen(path) : 0;
+    if (st == SLUICE_OK && missing && pl >= 3) {
+        /* assimp's fallback: the OBJ's own name, "obj" replaced by "mtl" */
+        char *fb = malloc(pl + 1);
+        if (!fb) {
+            sr_set_error(err, err_size, "%s: out of memory", label);
+            st = SLUICE_ERROR_OUT_OF_MEMORY;
+        } else {
+            memcpy(fb, path, pl - 3);
+            memcpy(fb + pl - 3, "mtl", 4);
+            int found = 0;
+            st = check_mtl_at("", fb, &found, label, err, err_size);
+            free(fb);
+        }
+    }
+    free(dir);
+    return st;
 }
 
 /* Non-zero when `ext` (a file extension or format hint) is `want`, in any
@@ -378,14 +556,15 @@ static int is_format(const char *ext, const char *want)
 
 /* The checks on the data's first bytes (`head`) and the rest (`b`). */
 static sluice_status check_header(const unsigned char *head, size_t head_len, body *b,
-                                  const char *ext, const char *label, char *err, size_t err_size)
+                                  const char *ext, const char *path, const char *label, char *err,
+                                  size_t err_size)
 {
     cursor c = {head, head, head + head_len};
     sluice_status st = check_off(c, b->size, label, err, err_size);
     if (st == SLUICE_OK)
         st = check_ply(c, b, label, err, err_size);
     if (st == SLUICE_OK && is_format(ext, "obj"))
-        st = check_text(b, label, err, err_size);
+        st = check_obj(b, path, label, err, err_size);
     return st;
 }
 
@@ -436,7 +615,7 @@ sluice_status sr_mesh_guard_file(const char *path, const char *label, char *err,
             const char *dot = strrchr(path, '.');
             const char *slash = strrchr(path, '/');
             const char *ext = dot && (!slash || dot > slash) ? dot + 1 : NULL;
-            st = check_header(head, n, b, ext, label, err, err_size);
+            st = check_header(head, n, b, ext, path, label, err, err_size);
         }
     }
     free(head);
@@ -466,7 +645,7 @@ sluice_status sr_mesh_guard_memory(const void *data, size_t size, const char *hi
     b->size = size;
     sluice_status st =
         check_header(data, size < SR_MESH_GUARD_HEAD_BYTES ? size : SR_MESH_GUARD_HEAD_BYTES, b,
-                     hint, label, err, err_size);
+                     hint, NULL, label, err, err_size);
     free(b);
     return st;
 }
