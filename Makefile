@@ -6,11 +6,13 @@
 #   make asan   the suite again in an ASan+UBSan build of the host code
 #   make sweep  (optional) every CLI over every file of Debian's
 #               assimp-testmodels, installed when missing (tools/sweep_models.py)
+#   make fuzz   (optional) the libFuzzer harnesses of tests/fuzz/, built with
+#               clang (FUZZ_RUNS executions each, default 10^6)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 MESON_FLAGS ?=
 
-.PHONY: all deps build demo test bench asan sweep install clean
+.PHONY: all deps build demo test bench asan sweep fuzz install clean
 
 all: build
 
@@ -59,8 +61,12 @@ sweep: build
 	      else sudo apt-get install -y -q assimp-testmodels; fi; }
 	python3 tools/sweep_models.py --build $(BUILD) $(SWEEP_FLAGS)
 
+# Not part of the normal build (CI builds with gcc): clang and libFuzzer.
+fuzz:
+	sh tests/fuzz/fuzz.sh all
+
 install: build
 	meson install -C $(BUILD)
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) build-fuzz
