@@ -119,6 +119,12 @@ static void test_ply(void)
     write_bytes("malformed_short.ply", bin, sizeof bin);
     expect_refused("malformed_short.ply", SLUICE_ERROR_IO, "data ends within element 'face' 0",
                    NULL);
+    /* two vertex elements: assimp sized its array by the first, filled it
+     * from both (a heap overflow) */
+    write_text("malformed_twice.ply",
+               "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+               "element vertex 3\nproperty float x\nend_header\n0\n0\n1\n2\n");
+    expect_refused("malformed_twice.ply", SLUICE_ERROR_IO, "element 'vertex' declared twice", NULL);
     bin[sizeof bin_head - 1 + 36] = 3;
     bin[sizeof bin_head - 1 + 37 + 4] = 1; /* indices 0, 1, 2 */
     bin[sizeof bin_head - 1 + 37 + 8] = 2;

@@ -273,6 +273,15 @@ static sluice_status check_ply(cursor c, body *b, const char *label, char *err, 
             *e = no_element;
             e->first = (unsigned)np;
             token(&c, e->name, sizeof e->name);
+            for (size_t k = 0; k + 1 < ne; ++k) {
+                /* assimp sizes its arrays by the first and fills them
+                 * from all: a heap overflow */
+                if (strcmp(el[k].name, e->name) == 0) {
+                    sr_set_error(err, err_size, "%s: PLY element '%s' declared twice", label,
+                                 e->name);
+                    return SLUICE_ERROR_IO;
+                }
+            }
             if (!number(&c, &e->count)) {
                 sr_set_error(err, err_size, "%s: PLY element '%s' without a count", label, e->name);
                 return SLUICE_ERROR_IO;
