@@ -68,13 +68,19 @@ static int number(cursor *c, unsigned long long *out)
  * ("0 0 0\n", 6 bytes) and every face at least one ("0\n", 2 bytes). */
 static sluice_status check_off(cursor c, size_t size, const char *label, char *err, size_t err_size)
 {
-    char tok[16];
-    token(&c, tok, sizeof tok);
-    size_t tl = strlen(tok);
-    if (tl < 3 || tl > 9 || strcmp(tok + tl - 3, "OFF") != 0)
+    /* as assimp reads it: the prefix letters, "OFF", and the numbers right
+     * after it ("OFF2044" counts from 2044) */
+    skip_blank(&c);
+    int dimension = 0;
+    while (c.p < c.end && strchr("STCN4n", *c.p)) {
+        dimension |= *c.p == 'n';
+        c.p++;
+    }
+    if (c.end - c.p < 3 || memcmp(c.p, "OFF", 3) != 0)
         return SLUICE_OK;
+    c.p += 3;
     unsigned long long dim = 3, nv = 0, nf = 0;
-    if (strchr(tok, 'n') && !number(&c, &dim))
+    if (dimension && !number(&c, &dim))
         return SLUICE_OK; /* assimp reports the bad header */
     if (!number(&c, &nv) || !number(&c, &nf))
         return SLUICE_OK;
