@@ -122,6 +122,11 @@ static void test_ply(void)
     write_bytes("malformed_short.ply", bin, sizeof bin);
     expect_refused("malformed_short.ply", SLUICE_ERROR_IO, "data ends within element 'face' 0",
                    NULL);
+    /* fuzz_mesh: an ASCII face claiming 244444444444 corners; assimp
+     * reserved room for them all */
+    snprintf(text, sizeof text, "%send_header\n0 0 0\n1 0 0\n0 1 0\n244444444444 0 1 2\n", head);
+    write_text("malformed_list.ply", text);
+    expect_refused("malformed_list.ply", SLUICE_ERROR_LIMIT, "a list of 244444444444 items", NULL);
     /* two vertex elements: assimp sized its array by the first, filled it
      * from both (a heap overflow) */
     write_text("malformed_twice.ply",

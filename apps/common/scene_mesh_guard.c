@@ -204,6 +204,76 @@ static sluice_status walk_binary_ply(body *b, int big_endian, const ply_element 
     return SLUICE_OK;
 }
 
+static int body_getc(body *b);
+
+/* Reads the next word of the current line of ASCII PLY data as an unsigned
+ * count, as assimp's strtoul10 does (the leading digits, saturating; a
+ * leading '-' gives ~0ull >> 4). 1: a word; 0: the line ended (its '\n' is
+ * consumed); -1: the data ended. */
+static int ascii_word(body *b, unsigned long long *out)
+{
+    int ch;
+    while ((ch = body_getc(b)) >= 0 && ch != '\n' && isspace(ch)) {
+    }
+    if (ch < 0)
+        return -1;
+    if (ch == '\n')
+        return 0;
+    unsigned long long v = 0;
+    int digits = 1;
+    if (ch == '-')
+        v = ~0ull >> 4, digits = 0;
+    for (; ch >= 0 && !isspace(ch); ch = body_getc(b)) {
+        digits = digits && isdigit(ch);
+        if (digits)
+            v = v >= (~0ull >> 4) / 10 ? (~0ull >> 4) : v * 10 + (unsigned)(ch - '0');
+    }
+    if (ch == '\n')
+        b->pos--; /* the line's end is the next call's */
+    *out = v;
+    return 1;
+}
+
+/* Walks an ASCII PLY's data line by line (an element instance a line, as
+ * assimp reads it): assimp 5.2 reserves room for a list's count before
+ * reading its items, so a face claiming 244444444444 corners takes all
+ * memory. A list may not count more items than the rest of the file holds
+ * (two bytes an item: a digit and a separator). */
+static sluice_status walk_ascii_ply(body *b, const ply_element *el, size_t ne,
+                                    const ply_property *pr, const char *label, char *err,
+                                    size_t err_size)
+{
+    for (size_t e = 0; e < ne; ++e) {
+        for (unsigned long long i = 0; i < el[e].count; ++i) {
+            int r = 1;
+            unsigned long long n = 0;
+            for (unsigned k = el[e].first; r > 0 && k < el[e].first + el[e].properties; ++k) {
+                r = ascii_word(b, &n);
+                if (r <= 0 || !pr[k].count_size)
+                    continue;
+                if (n > (b->size - b->pos) / 2) {
+                    sr_set_error(err, err_size,
+                                 "%s: PLY element '%s' %llu: a list of %llu items, more than the "
+                                 "rest of the file holds",
+                                 label, el[e].name, i, n);
+                    return SLUICE_ERROR_LIMIT;
+                }
+                unsigned long long item;
+                for (unsigned long long j = 0; r > 0 && j < n; ++j)
+                    r = ascii_word(b, &item);
+            }
+            if (r < 0)
+                return SLUICE_OK; /* short data: assimp reads what is there */
+            /* the rest of the instance's line */
+            while (r > 0)
+                r = ascii_word(b, &n);
+            if (r < 0)
+                return SLUICE_OK;
+        }
+    }
+    return SLUICE_OK;
+}
+
 /* PLY: the header must end (an end_header line) within
  * SR_MESH_GUARD_HEAD_BYTES and be printable text, tabs and line ends:
  * assimp 5.2's PLY parser loops forever on a header without that line (a
@@ -340,8 +410,7 @@ static sluice_status check_ply(cursor c, body *b, const char *label, char *err, 
         sr_set_error(err, err_size, "%s: the PLY header has no format line", label);
         return SLUICE_ERROR_IO;
     }
-    if (!binary)
-        return SLUICE_OK;
+
     /* the data starts after the end_header line ("\n" or "\r\n") */
     size_t at = (size_t)(end_header - c.start) + 10;
     unsigned char ch = 0;
@@ -352,7 +421,9 @@ static sluice_status check_ply(cursor c, body *b, const char *label, char *err, 
         body_read(b, &ch, 1);
     }
     b->pos = at + (ch == '\n');
-    return walk_binary_ply(b, big_endian, el, ne, pr, label, err, err_size);
+    b->block_pos = b->block_len = 0;
+    return binary ? walk_binary_ply(b, big_endian, el, ne, pr, label, err, err_size)
+                  : walk_ascii_ply(b, el, ne, pr, label, err, err_size);
 }
 
 /* The next byte of `b`, read from the start onwards; -1 at the end. */
