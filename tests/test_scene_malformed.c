@@ -13,6 +13,15 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/lsan_interface.h>
+#define LEAKS_IGNORED_BEGIN() __lsan_disable()
+#define LEAKS_IGNORED_END() __lsan_enable()
+#else
+#define LEAKS_IGNORED_BEGIN()
+#define LEAKS_IGNORED_END()
+#endif
+
 /* Every load here takes milliseconds; a regressed guard hangs (assimp's PLY
  * parser) or allocates for a minute (the OFF counts) first. */
 #define SECONDS_ALLOWED 60
@@ -65,7 +74,11 @@ static size_t loaded_triangles(const char *path)
 static void test_raw_null_child(void)
 {
     write_text("malformed_null_child.raw", "a\n0 0 0 1 0 0 0 1 0\n\nb\n0 0 1 1 0 1 0 1 1\n");
+    /* the RAW loader loses the node it left out of the array: assimp's
+     * leak, not ours, so LeakSanitizer ignores this one call's allocations */
+    LEAKS_IGNORED_BEGIN();
     expect_refused("malformed_null_child.raw", SLUICE_ERROR_IO, "nullptr", NULL);
+    LEAKS_IGNORED_END();
 }
 
 /* assimp-testmodels' invalid/OutOfMemory.off declares 353535235358
