@@ -95,6 +95,8 @@ static void test_off_counts(void)
     /* fuzz_mesh: the counts glued to the header token */
     write_text("malformed_glued.off", "OFF2044\n4444444444 1\n0 0 0\n");
     expect_refused("malformed_glued.off", SLUICE_ERROR_LIMIT, "OFF header declares", NULL);
+    write_text("malformed_headless.off", "4444444444 4\n");
+    expect_refused("malformed_headless.off", SLUICE_ERROR_LIMIT, "OFF header declares", NULL);
     write_text("fine.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
     CHECK(loaded_triangles("fine.off") == 1, "a good OFF still loads");
 }

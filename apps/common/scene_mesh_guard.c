@@ -64,10 +64,13 @@ static int number(cursor *c, unsigned long long *out)
 }
 
 /* OFF (assimp's header: [ST][C][N][4][n]OFF, a dimension after nOFF, then
- * the vertex and face counts): every vertex takes at least three numbers
+ * the vertex and face counts; in a file named .off the header may be
+ * missing): every vertex takes at least three numbers
  * ("0 0 0\n", 6 bytes) and every face at least one ("0\n", 2 bytes). */
-static sluice_status check_off(cursor c, size_t size, const char *label, char *err, size_t err_size)
+static sluice_status check_off(cursor c, int is_off, size_t size, const char *label, char *err,
+                               size_t err_size)
 {
+    const cursor start = c;
     /* as assimp reads it: the prefix letters, "OFF", and the numbers right
      * after it ("OFF2044" counts from 2044) */
     skip_blank(&c);
@@ -76,9 +79,12 @@ static sluice_status check_off(cursor c, size_t size, const char *label, char *e
         dimension |= *c.p == 'n';
         c.p++;
     }
-    if (c.end - c.p < 3 || memcmp(c.p, "OFF", 3) != 0)
+    if (c.end - c.p >= 3 && memcmp(c.p, "OFF", 3) == 0)
+        c.p += 3;
+    else if (is_off)
+        c = start; /* assimp reads a file named .off without the header too */
+    else
         return SLUICE_OK;
-    c.p += 3;
     unsigned long long dim = 3, nv = 0, nf = 0;
     if (dimension && !number(&c, &dim))
         return SLUICE_OK; /* assimp reports the bad header */
@@ -646,7 +652,7 @@ static sluice_status check_header(const unsigned char *head, size_t head_len, bo
                                   size_t err_size)
 {
     cursor c = {head, head, head + head_len};
-    sluice_status st = check_off(c, b->size, label, err, err_size);
+    sluice_status st = check_off(c, is_format(ext, "off"), b->size, label, err, err_size);
     if (st == SLUICE_OK)
         st = check_ply(c, b, label, err, err_size);
     if (st == SLUICE_OK && is_format(ext, "obj"))
