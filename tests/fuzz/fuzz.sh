@@ -5,10 +5,12 @@
 #   sh tests/fuzz/fuzz.sh [build|run|all] [HARNESS...]
 # Environment: FUZZ_DIR (default build-fuzz), FUZZ_RUNS (executions per
 # harness, default 1000000), FUZZ_TIME (seconds per harness, default 0: no
-# limit), FUZZ_JOBS (parallel workers per harness, default 1), FUZZ_SANITIZE
-# (default address,undefined; "undefined" alone runs several times faster:
-# Debian's assimp zeroes a 4 MiB buffer per OBJ import, which ASan makes
-# slow), CC (clang).
+# limit), FUZZ_JOBS (parallel workers per harness, default 1),
+# FUZZ_KEEP_GOING=1 (fork mode: go on after a crash, timeout or
+# out-of-memory in a child, collecting every artifact; for assimp's own
+# bugs), FUZZ_SANITIZE (default address,undefined; "undefined" alone runs
+# several times faster: Debian's assimp zeroes a 4 MiB buffer per OBJ
+# import, which ASan makes slow), CC (clang).
 set -eu
 ROOT=$(pwd)
 OUT=${FUZZ_DIR:-build-fuzz}
@@ -68,6 +70,8 @@ run() {
         [ -f "tests/fuzz/$kind.dict" ] && dict="-dict=tests/fuzz/$kind.dict"
         par=""
         [ "$JOBS" -gt 1 ] && par="-jobs=$JOBS -workers=$JOBS"
+        [ "${FUZZ_KEEP_GOING:-0}" = 1 ] &&
+            par="$par -fork=$JOBS -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1"
         mkdir -p "$OUT/artifacts-$h"
         echo "running $h: $RUNS executions, $TIME s at most (0: no limit); log $OUT/$h.log"
         # -timeout: an input taking over 10 s is a hang; -rss_limit_mb and
@@ -79,7 +83,8 @@ run() {
             -rss_limit_mb=2048 -malloc_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
             $par $dict -artifact_prefix="$OUT/artifacts-$h/" \
             "$OUT/corpus-$h" "$OUT/seeds-$kind" >"$OUT/$h.log" 2>&1 || status=1
-        grep -E '^(stat::|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Done|INFO: Seed)' "$OUT/$h.log" || true
+        grep -E '^(stat::|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Done|INFO: Seed|INFO: fuzzed)' \
+            "$OUT/$h.log" || true
     done
     return $status
 }
