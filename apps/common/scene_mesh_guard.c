@@ -75,7 +75,7 @@ static sluice_status check_off(cursor c, int is_off, size_t size, const char *la
      * after it ("OFF2044" counts from 2044) */
     skip_blank(&c);
     int dimension = 0;
-    while (c.p < c.end && strchr("STCN4n", *c.p)) {
+    while (c.p < c.end && *c.p && strchr("STCN4n", *c.p)) {
         dimension |= *c.p == 'n';
         c.p++;
     }
@@ -85,6 +85,24 @@ static sluice_status check_off(cursor c, int is_off, size_t size, const char *la
         c = start; /* assimp reads a file named .off without the header too */
     else
         return SLUICE_OK;
+    /* assimp's tokenizer differs in corners (comments, glued tokens): as a
+     * bound that does not depend on it, none of the first four numbers of
+     * the header may exceed what the file holds at two bytes an element */
+    cursor q = start;
+    for (int runs = 0; runs < 4 && q.p < q.end && q.p - q.start < 256; ++q.p) {
+        if (!isdigit(*q.p))
+            continue;
+        unsigned long long v = 0;
+        for (; q.p < q.end && isdigit(*q.p); q.p++)
+            v = v >= (~0ull >> 4) / 10 ? (~0ull >> 4) : v * 10 + (unsigned)(*q.p - '0');
+        runs++;
+        if (v > size / 2) {
+            sr_set_error(err, err_size,
+                         "%s: the OFF header's count %llu is more than a file of %zu bytes holds",
+                         label, v, size);
+            return SLUICE_ERROR_LIMIT;
+        }
+    }
     unsigned long long dim = 3, nv = 0, nf = 0;
     if (dimension && !number(&c, &dim))
         return SLUICE_OK; /* assimp reports the bad header */
