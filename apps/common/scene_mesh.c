@@ -468,7 +468,8 @@ static sluice_status import_scene(const mesh_source *src, const char *label,
     /* the importer kept the properties (AI_CONFIG_PP_SBP_REMOVE) */
     sc = aiApplyPostProcessing(sc, aiProcess_Triangulate | aiProcess_SortByPType);
     if (!sc) {
-        /* assimp has released the scene already */
+        /* not expected after check_surfaces (and on a failure here assimp
+         * 5.2's C API crashes releasing the scene) */
         sr_set_error(err, err_size, "%s: assimp cannot triangulate it: %s", label,
                      aiGetErrorString());
         return SLUICE_ERROR_IO;
