@@ -345,6 +345,7 @@ static sluice_status check_ply(cursor c, body *b, const char *label, char *err, 
     size_t ne = 0, np = 0;
     int format = 0, binary = 0, big_endian = 0;
     unsigned long long total = 0;
+    const unsigned char *head_end = c.end;
     c.end = end_header;
     while (c.p < c.end) {
         token(&c, tok, sizeof tok);
@@ -435,16 +436,14 @@ static sluice_status check_ply(cursor c, body *b, const char *label, char *err, 
         return SLUICE_ERROR_IO;
     }
 
-    /* the data starts after the end_header line ("\n" or "\r\n") */
-    size_t at = (size_t)(end_header - c.start) + 10;
-    unsigned char ch = 0;
-    b->pos = at;
-    if (body_read(b, &ch, 1) && ch == '\r') {
-        at++;
-        ch = 0;
-        body_read(b, &ch, 1);
-    }
-    b->pos = at + (ch == '\n');
+    /* the data starts after the end_header line (blanks, then "\n" or
+     * "\r\n"; the head holds that line, as the scan above checked) */
+    const unsigned char *q = end_header + 10;
+    while (*q == ' ' || *q == '\t')
+        q++;
+    q += *q == '\r';
+    q += q < head_end && *q == '\n';
+    b->pos = (size_t)(q - c.start);
     b->block_pos = b->block_len = 0;
     return binary ? walk_binary_ply(b, big_endian, el, ne, pr, label, err, err_size)
                   : walk_ascii_ply(b, el, ne, pr, label, err, err_size);
