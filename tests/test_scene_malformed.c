@@ -143,6 +143,13 @@ static void test_ply(void)
     snprintf(text, sizeof text, "%send_header\n0 0 0\n1 0 0\n0 1 0\n244444444444 0 1 2\n", head);
     write_text("malformed_list.ply", text);
     expect_refused("malformed_list.ply", SLUICE_ERROR_LIMIT, "a list of 244444444444 items", NULL);
+    /* fuzz_mesh: a NUL in ASCII data ends assimp's line there, and the
+     * next "line" counted a face's corners by the billion */
+    static const char nul_ply[] = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                                  "element face 1\nproperty list uchar int vertex_indices\n"
+                                  "end_header\n0 \0 4444444444444 0 0\n";
+    write_bytes("malformed_nul.ply", nul_ply, sizeof nul_ply - 1);
+    expect_refused("malformed_nul.ply", SLUICE_ERROR_IO, "is NUL", NULL);
     /* two vertex elements: assimp sized its array by the first, filled it
      * from both (a heap overflow) */
     write_text("malformed_twice.ply",

@@ -233,7 +233,8 @@ static int body_getc(body *b);
 /* Reads the next word of the current line of ASCII PLY data as an unsigned
  * count, as assimp's strtoul10 does (the leading digits, saturating; a
  * leading '-' gives ~0ull >> 4). 1: a word; 0: the line ended (its '\n' is
- * consumed); -1: the data ended. */
+ * consumed); -1: the data ended; -2: a NUL byte (assimp's line reader
+ * ends a line there, which shifts every later line). */
 static int ascii_word(body *b, unsigned long long *out)
 {
     int ch;
@@ -243,11 +244,15 @@ static int ascii_word(body *b, unsigned long long *out)
         return -1;
     if (ch == '\n')
         return 0;
+    if (ch == 0)
+        return -2;
     unsigned long long v = 0;
     int digits = 1;
     if (ch == '-')
         v = ~0ull >> 4, digits = 0;
     for (; ch >= 0 && !isspace(ch); ch = body_getc(b)) {
+        if (ch == 0)
+            return -2;
         digits = digits && isdigit(ch);
         if (digits)
             v = v >= (~0ull >> 4) / 10 ? (~0ull >> 4) : v * 10 + (unsigned)(ch - '0');
@@ -286,13 +291,16 @@ static sluice_status walk_ascii_ply(body *b, const ply_element *el, size_t ne,
                 for (unsigned long long j = 0; r > 0 && j < n; ++j)
                     r = ascii_word(b, &item);
             }
-            if (r < 0)
-                return SLUICE_OK; /* short data: assimp reads what is there */
             /* the rest of the instance's line */
             while (r > 0)
                 r = ascii_word(b, &n);
+            if (r == -2) {
+                sr_set_error(err, err_size, "%s: an ASCII PLY file is text, but byte %zu is NUL",
+                             label, b->pos - 1);
+                return SLUICE_ERROR_IO;
+            }
             if (r < 0)
-                return SLUICE_OK;
+                return SLUICE_OK; /* short data: assimp reads what is there */
         }
     }
     return SLUICE_OK;
