@@ -150,6 +150,10 @@ static void test_ply(void)
                                   "end_header\n0 \0 4444444444444 0 0\n";
     write_bytes("malformed_nul.ply", nul_ply, sizeof nul_ply - 1);
     expect_refused("malformed_nul.ply", SLUICE_ERROR_IO, "is NUL", NULL);
+    /* fuzz_mesh: a NUL before the magic; assimp read on, looking for
+     * end_header forever */
+    write_bytes("malformed_magic.ply", "\0\nply\nformat ascii 1.0 x\n", 25);
+    expect_refused("malformed_magic.ply", SLUICE_ERROR_IO, "starts with \"ply\"", NULL);
     /* two vertex elements: assimp sized its array by the first, filled it
      * from both (a heap overflow) */
     write_text("malformed_twice.ply",

@@ -312,12 +312,22 @@ static sluice_status walk_ascii_ply(body *b, const ply_element *el, size_t ne,
  * NUL, a vertical tab or a missing newline hide it). Property types must be ones assimp knows.
  * Every element instance takes at least one byte (a line in ASCII, a
  * property in binary); binary data is walked to its end (walk_binary_ply). */
-static sluice_status check_ply(cursor c, body *b, const char *label, char *err, size_t err_size)
+static sluice_status check_ply(cursor c, int is_ply, body *b, const char *label, char *err,
+                               size_t err_size)
 {
-    /* assimp takes any data that starts with "ply" in any case for PLY */
-    if (c.end - c.p < 3 || tolower(c.p[0]) != 'p' || tolower(c.p[1]) != 'l' ||
-        tolower(c.p[2]) != 'y')
+    /* assimp takes data that starts with "ply" in any case for PLY, and a
+     * file named .ply even when blanks or NUL bytes come first */
+    const unsigned char *q0 = c.p;
+    while (q0 < c.end && (isspace(*q0) || *q0 == 0))
+        q0++;
+    int magic =
+        c.end - q0 >= 3 && tolower(q0[0]) == 'p' && tolower(q0[1]) == 'l' && tolower(q0[2]) == 'y';
+    if (!magic && !is_ply)
         return SLUICE_OK;
+    if (!magic || q0 != c.p) {
+        sr_set_error(err, err_size, "%s: a PLY file starts with \"ply\"", label);
+        return SLUICE_ERROR_IO;
+    }
     /* the header ends at a line that starts with end_header */
     const unsigned char *end_header = NULL;
     int line_start = 1;
@@ -679,7 +689,7 @@ static sluice_status check_header(const unsigned char *head, size_t head_len, bo
     cursor c = {head, head, head + head_len};
     sluice_status st = check_off(c, is_format(ext, "off"), b->size, label, err, err_size);
     if (st == SLUICE_OK)
-        st = check_ply(c, b, label, err, err_size);
+        st = check_ply(c, is_format(ext, "ply"), b, label, err, err_size);
     if (st == SLUICE_OK && is_format(ext, "obj"))
         st = check_obj(b, path, label, err, err_size);
     return st;
