@@ -154,6 +154,11 @@ static void test_ply(void)
      * end_header forever */
     write_bytes("malformed_magic.ply", "\0\nply\nformat ascii 1.0 x\n", 25);
     expect_refused("malformed_magic.ply", SLUICE_ERROR_IO, "starts with \"ply\"", NULL);
+    /* fuzz_mesh: digits glued before an element's name; assimp took them
+     * for its count */
+    write_text("malformed_name.ply", "ply\nformat ascii 1.0\nelement 88888888888888vertex 1\n"
+                                     "property float x\nend_header\n0\n");
+    expect_refused("malformed_name.ply", SLUICE_ERROR_IO, "is not a word", NULL);
     /* two vertex elements: assimp sized its array by the first, filled it
      * from both (a heap overflow) */
     write_text("malformed_twice.ply",
@@ -173,6 +178,17 @@ static void test_ply(void)
     snprintf(text, sizeof text, "%send_header\n0 0 0\n1 0 0\n0 1 0\n", head);
     write_text("malformed_no_faces.ply", text);
     expect_refused("malformed_no_faces.ply", SLUICE_ERROR_IO, "face 0 has no vertices", NULL);
+}
+
+/* fuzz_mesh: a binary glTF whose JSON chunk claims 4 GiB; assimp
+ * allocated it. */
+static void test_glb(void)
+{
+    unsigned char glb[64];
+    memset(glb, ' ', sizeof glb);
+    memcpy(glb, "glTF\2\0\0\0\100\0\0\0\170\2\377\377JSON", 20);
+    write_bytes("malformed_chunk.glb", glb, sizeof glb);
+    expect_refused("malformed_chunk.glb", SLUICE_ERROR_LIMIT, "chunk longer than the file", NULL);
 }
 
 /* A file of points only: SortByPType dropped every mesh, post-processing
@@ -291,6 +307,7 @@ int main(void)
     test_raw_null_child();
     test_off_counts();
     test_ply();
+    test_glb();
     test_points_only();
     test_obj();
     test_not_regular();

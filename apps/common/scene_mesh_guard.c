@@ -5,6 +5,7 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -392,6 +393,15 @@ static sluice_status check_ply(cursor c, int is_ply, body *b, const char *label,
             *e = no_element;
             e->first = (unsigned)np;
             token(&c, e->name, sizeof e->name);
+            int word = isalpha((unsigned char)e->name[0]) || e->name[0] == '_';
+            for (const char *q = e->name; *q && word; ++q)
+                word = isalnum((unsigned char)*q) || *q == '_' || *q == '-';
+            if (!word) {
+                /* assimp reads a name that starts with digits as the count */
+                sr_set_error(err, err_size, "%s: PLY element name '%s' is not a word", label,
+                             e->name);
+                return SLUICE_ERROR_IO;
+            }
             for (size_t k = 0; k + 1 < ne; ++k) {
                 /* assimp sizes its arrays by the first and fills them
                  * from all: a heap overflow */
@@ -681,6 +691,31 @@ static int is_format(const char *ext, const char *want)
     return !*ext && !*want;
 }
 
+static uint32_t le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* Binary glTF: assimp allocates the lengths its header and chunk headers
+ * give before reading; each must fit the file. */
+static sluice_status check_glb(const unsigned char *head, size_t head_len, size_t size,
+                               const char *label, char *err, size_t err_size)
+{
+    if (head_len < 20 || memcmp(head, "glTF", 4) != 0)
+        return SLUICE_OK;
+    uint32_t total = le32(head + 8), json = le32(head + 12);
+    size_t next = 20 + (size_t)json;
+    int bad = total > size || json > size - 20;
+    if (!bad && next + 8 <= head_len)
+        bad = le32(head + next) > size - next - 8; /* the BIN chunk */
+    if (bad) {
+        sr_set_error(err, err_size, "%s: a glTF binary chunk longer than the file's %zu bytes",
+                     label, size);
+        return SLUICE_ERROR_LIMIT;
+    }
+    return SLUICE_OK;
+}
+
 /* The checks on the data's first bytes (`head`) and the rest (`b`). */
 static sluice_status check_header(const unsigned char *head, size_t head_len, body *b,
                                   const char *ext, const char *path, const char *label, char *err,
@@ -690,6 +725,8 @@ static sluice_status check_header(const unsigned char *head, size_t head_len, bo
     sluice_status st = check_off(c, is_format(ext, "off"), b->size, label, err, err_size);
     if (st == SLUICE_OK)
         st = check_ply(c, is_format(ext, "ply"), b, label, err, err_size);
+    if (st == SLUICE_OK)
+        st = check_glb(head, head_len, b->size, label, err, err_size);
     if (st == SLUICE_OK && is_format(ext, "obj"))
         st = check_obj(b, path, label, err, err_size);
     return st;
