@@ -8,11 +8,15 @@
 #   make mitsuba-agreement  install Mitsuba 3 into bench/.venv, render the
 #               same scenes with it and compare (bench/mitsuba_compare.py)
 #   make asan   the suite again in an ASan+UBSan build of the host code
+#   make sweep  (optional) every CLI over every file of Debian's
+#               assimp-testmodels, installed when missing (tools/sweep_models.py)
+#   make fuzz   (optional) the libFuzzer harnesses of tests/fuzz/, built with
+#               clang (FUZZ_RUNS executions each, default 10^6)
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 MESON_FLAGS ?=
 
-.PHONY: all deps build demo test bench references mitsuba-agreement asan install clean
+.PHONY: all deps build demo test bench references mitsuba-agreement asan sweep fuzz install clean
 
 all: build
 
@@ -63,8 +67,20 @@ asan: deps $(ASAN_BUILD)/build.ninja
 	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 	    ctest --test-dir $(ASAN_BUILD) --output-on-failure
 
+# Not part of `make test`: about 600 files, a few minutes with the renderers.
+SWEEP_FLAGS ?=
+sweep: build
+	@dpkg-query -W -f='$${Status}' assimp-testmodels 2>/dev/null | grep -q "install ok installed" || \
+	    { if [ "$$(id -u)" = 0 ]; then apt-get install -y -q assimp-testmodels; \
+	      else sudo apt-get install -y -q assimp-testmodels; fi; }
+	python3 tools/sweep_models.py --build $(BUILD) $(SWEEP_FLAGS)
+
+# Not part of the normal build (CI builds with gcc): clang and libFuzzer.
+fuzz:
+	sh tests/fuzz/fuzz.sh all
+
 install: build
 	meson install -C $(BUILD)
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) build-fuzz

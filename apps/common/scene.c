@@ -45,6 +45,7 @@ struct sr_scene_builder {
     size_t warnings_len, warning_count;
     sr_scene_warning_fn warn_fn;
     void *warn_user;
+    size_t max_triangles; /* the caller's limit; 0: MAX_ELEMENTS */
     int finished;
 };
 
@@ -220,6 +221,12 @@ sluice_status sr_scene_builder_create(const char *source, sr_scene_builder **out
     b->render = sr_render_settings_default();
     *out = b;
     return SLUICE_OK;
+}
+
+void sr_scene_builder_set_max_triangles(sr_scene_builder *b, size_t max_triangles)
+{
+    if (b)
+        b->max_triangles = max_triangles;
 }
 
 void sr_scene_builder_destroy(sr_scene_builder *b)
@@ -479,6 +486,11 @@ sluice_status sr_scene_builder_add_mesh(sr_scene_builder *b, const sr_mesh_desc 
                      b->source, src, MAX_ELEMENTS);
         return SLUICE_ERROR_LIMIT;
     }
+    if (b->max_triangles && b->triangle_count + nt > b->max_triangles) {
+        sr_set_error(err, err_size, "%s: %s: the scene would exceed the limit of %zu triangles",
+                     b->source, src, b->max_triangles);
+        return SLUICE_ERROR_LIMIT;
+    }
     /* 1. inputs: finite positions and normals, indices and materials in range */
     for (size_t i = 0; i < nv; ++i) {
         const float *p = mesh->positions + 3 * i;
@@ -576,7 +588,10 @@ sluice_status sr_scene_builder_add_mesh(sr_scene_builder *b, const sr_mesh_desc 
     if (ok && need_normals) {
         int fresh = b->normals == NULL;
         ok = reserve((void **)&b->normals, &b->normal_cap, nvf, sizeof(float));
-        if (ok && fresh) /* earlier meshes had no normals: zero means "none" */
+        /* earlier meshes had no normals: zero means "none". With nothing
+         * kept yet (a first mesh of degenerate triangles only) reserve had
+         * nothing to allocate and b->normals is still NULL. */
+        if (ok && fresh && b->normals)
             memset(b->normals, 0, 3 * b->vertex_count * sizeof(float));
     }
     ok = ok && reserve((void **)&b->indices, &b->index_cap, 3 * (b->triangle_count + kept_t),

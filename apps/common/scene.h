@@ -225,6 +225,10 @@ typedef struct sr_scene_load_options {
     unsigned flags;              /**< SR_SCENE_ALLOW_NO_LIGHT */
     sr_scene_warning_fn warning; /**< optional */
     void *warning_user;          /**< passed to `warning` */
+    /** The most triangles a JSON scene or mesh file may produce (0: no limit
+     *  beyond the builder's 2^32 - 1): a short JSON file can ask for
+     *  millions of sphere triangles; this bounds the work (fuzzing, servers). */
+    size_t max_triangles;
 } sr_scene_load_options;
 
 /**
@@ -346,6 +350,10 @@ sluice_status sr_scene_builder_create(const char *source, sr_scene_builder **out
 /** Frees the builder and everything it holds (NULL is fine). */
 void sr_scene_builder_destroy(sr_scene_builder *b);
 
+/** Sets the most triangles the builder accepts (0: 2^32 - 1, the default);
+ *  a mesh or shape that would go past it fails with SLUICE_ERROR_LIMIT. */
+void sr_scene_builder_set_max_triangles(sr_scene_builder *b, size_t max_triangles);
+
 /** Sets the warning callback (NULL: none). */
 void sr_scene_builder_set_warning_callback(sr_scene_builder *b, sr_scene_warning_fn fn, void *user);
 
@@ -427,14 +435,44 @@ sluice_status sr_scene_builder_add_mesh(sr_scene_builder *b, const sr_mesh_desc 
  *   GLOSSY when Ks > 0 and Ns > 0, else DIFFUSE;
  *   any Ke > 0 -> EMISSIVE, whatever illum says.
  * `label` (may be NULL: the path) names the file in messages. Errors:
- * SLUICE_ERROR_NOT_FOUND for a missing file, SLUICE_ERROR_IO with assimp's
- * message when it cannot read it (unknown format, syntax), and those of
+ * SLUICE_ERROR_NOT_FOUND for a missing file, SLUICE_ERROR_IO for a path that
+ * is not a regular file, an empty file, or with assimp's message when it
+ * cannot read it (unknown format, syntax, a structure its validation
+ * refuses), SLUICE_ERROR_LIMIT beyond the limits below, and those of
  * sr_scene_builder_add_mesh. On failure the builder is left with the
  * materials and meshes added before the failing mesh; callers destroy it.
+ *
+ * Limits, so that a malformed file takes bounded time and memory (assimp
+ * allocates what a header declares before reading it): at most
+ * SR_MESH_MAX_FILE_BYTES bytes; an OFF or PLY header may not declare more
+ * elements than the file's size can hold; at most SR_MESH_MAX_VERTICES
+ * vertices and SR_MESH_MAX_TRIANGLES faces as assimp returns them, and
+ * SR_MESH_MAX_TRIANGLES triangles once every node's copy is counted; node
+ * hierarchies at most 256 deep and 2^20 nodes.
  */
 sluice_status sr_scene_builder_add_mesh_file(sr_scene_builder *b, const char *path,
                                              const float *transform, const uint32_t *material,
                                              const char *label, char *err, size_t err_size);
+
+/** The largest mesh file (or buffer) sr_scene_builder_add_mesh_file reads. */
+#define SR_MESH_MAX_FILE_BYTES (256u << 20)
+/** The most vertices a mesh file may hold. */
+#define SR_MESH_MAX_VERTICES (1u << 26)
+/** The most faces a mesh file may hold, and triangles it may add. */
+#define SR_MESH_MAX_TRIANGLES (1u << 26)
+
+/**
+ * As sr_scene_builder_add_mesh_file, from `size` bytes at `data` in the
+ * format `hint` names (a file extension without the dot: "obj", "ply",
+ * "gltf", "glb", "off", "stl", ...; NULL or "" lets assimp guess from the
+ * content). Files the data refers to (an OBJ's MTL, a glTF's buffers) are
+ * looked for relative to the working directory. `label` (may be NULL:
+ * "(memory)") names the data in messages. For tests and fuzzing.
+ */
+sluice_status sr_scene_builder_add_mesh_memory(sr_scene_builder *b, const void *data, size_t size,
+                                               const char *hint, const float *transform,
+                                               const uint32_t *material, const char *label,
+                                               char *err, size_t err_size);
 
 /**
  * Adds a sphere of `radius` around `center`: a geodesic sphere (an

@@ -822,6 +822,7 @@ sluice_status sr_scene_load_json(const char *path, const sr_scene_load_options *
     if (opts) {
         sr_scene_builder_set_warning_callback(c.b, opts->warning, opts->warning_user);
         flags = opts->flags;
+        sr_scene_builder_set_max_triangles(c.b, opts->max_triangles);
     }
     st = parse_scene(&c, root);
     if (st == SLUICE_OK)

@@ -8,13 +8,13 @@
  * matches the file's face order, or none at all. */
 #include "scene.h"
 #include "app_error.h"
+#include "scene_mesh_guard.h"
 
 #include <assimp/cimport.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -24,6 +24,10 @@
 /* Deeper node hierarchies are refused rather than recursed into. */
 #define MAX_NODE_DEPTH 256
 
+/* Nodes visited per file: a hierarchy that names one child node several
+ * times is a graph whose walk can take 2^depth steps. */
+#define MAX_NODE_VISITS (1u << 20)
+
 /* State of one file being added. */
 typedef struct mesh_file {
     sr_scene_builder *b;
@@ -31,6 +35,8 @@ typedef struct mesh_file {
     const char *label;
     const uint32_t *override; /* material for everything, or NULL */
     uint32_t *material_map;   /* assimp material -> builder index, UINT32_MAX: not yet */
+    size_t nodes;             /* nodes visited */
+    size_t triangles;         /* triangles added, every instance counted */
     char *err;
     size_t err_size;
 } mesh_file;
@@ -172,6 +178,15 @@ static sluice_status add_one_mesh(mesh_file *f, unsigned mi, const double *xf)
     size_t nv = am->mNumVertices, nt = 0;
     for (unsigned i = 0; i < am->mNumFaces; ++i)
         nt += am->mFaces[i].mNumIndices == 3;
+    /* a mesh used by many nodes is copied for each: bound the copies too */
+    f->triangles += nt;
+    if (f->triangles > SR_MESH_MAX_TRIANGLES) {
+        sr_set_error(f->err, f->err_size,
+                     "%s: more than %u triangles once the node hierarchy's instances are "
+                     "counted (the limit for a mesh file)",
+                     f->label, SR_MESH_MAX_TRIANGLES);
+        return SLUICE_ERROR_LIMIT;
+    }
     float *pos = malloc((nv ? nv : 1) * 3 * sizeof *pos);
     float *nrm = am->mNormals ? malloc((nv ? nv : 1) * 3 * sizeof *nrm) : NULL;
     uint32_t *idx = malloc((nt ? nt : 1) * 3 * sizeof *idx);
@@ -236,6 +251,18 @@ static sluice_status add_node(mesh_file *f, const struct aiNode *node, const dou
                      MAX_NODE_DEPTH);
         return SLUICE_ERROR_LIMIT;
     }
+    if (++f->nodes > MAX_NODE_VISITS) {
+        sr_set_error(f->err, f->err_size, "%s: node hierarchy of more than %u nodes", f->label,
+                     MAX_NODE_VISITS);
+        return SLUICE_ERROR_LIMIT;
+    }
+    /* ValidateDataStructure refuses these; checked again because a walk
+     * that met one would crash */
+    if (!node || (node->mNumMeshes && !node->mMeshes) || (node->mNumChildren && !node->mChildren)) {
+        sr_set_error(f->err, f->err_size, "%s: assimp returned a broken node hierarchy (%s)",
+                     f->label, node ? "a node without its children or meshes" : "a NULL node");
+        return SLUICE_ERROR_IO;
+    }
     const struct aiMatrix4x4 *t = &node->mTransformation;
     /* assimp's matrices are row-major and act on column vectors, like ours */
     double local[16] = {t->a1, t->a2, t->a3, t->a4, t->b1, t->b2, t->b3, t->b4,
@@ -296,29 +323,112 @@ static sluice_status check_finite(const struct aiScene *sc, const char *label, c
     return SLUICE_OK;
 }
 
-sluice_status sr_scene_builder_add_mesh_file(sr_scene_builder *b, const char *path,
-                                             const float *transform, const uint32_t *material,
-                                             const char *label, char *err, size_t err_size)
+/* Checks what assimp returned before anything reads it: a loader may leave
+ * a NULL where a count says there is something (5.2's RAW loader gives the
+ * root node a NULL child), and counts past the limits would make us copy
+ * more than a file of SR_MESH_MAX_FILE_BYTES can mean. Node pointers are
+ * checked while walking the hierarchy (add_node). */
+static sluice_status check_structure(const struct aiScene *sc, const char *label, char *err,
+                                     size_t err_size)
 {
-    if (!b || !path) {
-        sr_set_error(err, err_size, "add_mesh_file: invalid argument");
-        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if ((sc->mNumMeshes && !sc->mMeshes) || (sc->mNumMaterials && !sc->mMaterials)) {
+        sr_set_error(err, err_size, "%s: assimp returned a scene without its %s", label,
+                     sc->mMeshes ? "materials" : "meshes");
+        return SLUICE_ERROR_IO;
     }
-    if (!label)
-        label = path;
-    /* assimp's "Unable to open file" does not say why; ask the system. */
-    FILE *probe = fopen(path, "rb");
-    if (!probe) {
-        int e = errno;
-        sr_set_error(err, err_size, "%s: cannot open: %s", label,
-                     e == ENOENT ? "no such file" : strerror(e));
-        return e == ENOENT ? SLUICE_ERROR_NOT_FOUND : SLUICE_ERROR_IO;
+    for (unsigned i = 0; i < sc->mNumMaterials; ++i) {
+        if (!sc->mMaterials[i]) {
+            sr_set_error(err, err_size, "%s: assimp returned material %u as NULL", label, i);
+            return SLUICE_ERROR_IO;
+        }
     }
-    fclose(probe);
-    if (material && *material >= sr_scene_builder_material_count(b)) {
-        sr_set_error(err, err_size, "%s: material %u out of range", label, *material);
-        return SLUICE_ERROR_INVALID_ARGUMENT;
+    size_t vertices = 0, faces = 0;
+    for (unsigned mi = 0; mi < sc->mNumMeshes; ++mi) {
+        const struct aiMesh *am = sc->mMeshes[mi];
+        if (!am || (am->mNumVertices && !am->mVertices) || (am->mNumFaces && !am->mFaces)) {
+            sr_set_error(err, err_size, "%s: assimp returned mesh %u %s", label, mi,
+                         am ? "without its vertices or faces" : "as NULL");
+            return SLUICE_ERROR_IO;
+        }
+        vertices += am->mNumVertices;
+        faces += am->mNumFaces;
+        if (vertices > SR_MESH_MAX_VERTICES || faces > SR_MESH_MAX_TRIANGLES) {
+            sr_set_error(err, err_size,
+                         "%s: more than %u vertices or %u faces (the limits for a mesh file)",
+                         label, SR_MESH_MAX_VERTICES, SR_MESH_MAX_TRIANGLES);
+            return SLUICE_ERROR_LIMIT;
+        }
+        unsigned types = 0;
+        for (unsigned fi = 0; fi < am->mNumFaces; ++fi) {
+            const struct aiFace *face = &am->mFaces[fi];
+            if (!face->mNumIndices || !face->mIndices) {
+                sr_set_error(err, err_size, "%s: mesh %u '%s': face %u has no vertices", label, mi,
+                             am->mName.data, fi);
+                return SLUICE_ERROR_IO;
+            }
+            types |= face->mNumIndices == 1   ? aiPrimitiveType_POINT
+                     : face->mNumIndices == 2 ? aiPrimitiveType_LINE
+                     : face->mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
+                                              : aiPrimitiveType_POLYGON;
+            for (unsigned k = 0; k < face->mNumIndices; ++k) {
+                if (face->mIndices[k] >= am->mNumVertices) {
+                    sr_set_error(err, err_size,
+                                 "%s: mesh %u '%s': face %u: vertex index %u out of range (%u "
+                                 "vertices)",
+                                 label, mi, am->mName.data, fi, face->mIndices[k],
+                                 am->mNumVertices);
+                    return SLUICE_ERROR_INVALID_ARGUMENT;
+                }
+            }
+        }
+        /* Triangulate and SortByPType trust the primitive types a loader
+         * claims, and assert when they are wrong: set them from the faces
+         * (assimp's own steps change the scene the same way) */
+        if (am->mNumFaces)
+            ((struct aiMesh *)am)->mPrimitiveTypes =
+                types | (am->mPrimitiveTypes & aiPrimitiveType_NGONEncodingFlag);
     }
+    return SLUICE_OK;
+}
+
+/* Fails unless some mesh has a face of 3 or more corners. SortByPType would
+ * drop every mesh of a file of points and lines, aiApplyPostProcessing would
+ * fail with "No meshes remaining", and on that failure assimp 5.2's C API
+ * releases the scene through an importer it has already destroyed (a crash
+ * in Importer::~Importer): no post-processing step may fail. */
+static sluice_status check_surfaces(const struct aiScene *sc, const char *label, char *err,
+                                    size_t err_size)
+{
+    for (unsigned mi = 0; mi < sc->mNumMeshes; ++mi) {
+        if (sc->mMeshes[mi]->mPrimitiveTypes & (aiPrimitiveType_TRIANGLE | aiPrimitiveType_POLYGON))
+            return SLUICE_OK;
+    }
+    sr_set_error(err, err_size, "%s: the file has no triangles or polygons%s", label,
+                 sc->mNumMeshes ? " (only points or lines)" : "");
+    return SLUICE_ERROR_IO;
+}
+
+/* Where the mesh comes from: a file (path) or a buffer (data, size, hint). */
+typedef struct mesh_source {
+    const char *path;
+    const void *data;
+    size_t size;
+    const char *hint;
+} mesh_source;
+
+/* Reads, validates and post-processes the scene; on success the caller
+ * releases *out with aiReleaseImport. */
+static sluice_status import_scene(const mesh_source *src, const char *label,
+                                  const struct aiScene **out, char *err, size_t err_size)
+{
+    *out = NULL;
+    /* assimp's "Unable to open file" does not say why: the guard does */
+    size_t size = src->size;
+    sluice_status st = src->path
+                           ? sr_mesh_guard_file(src->path, label, err, err_size)
+                           : sr_mesh_guard_memory(src->data, size, src->hint, label, err, err_size);
+    if (st != SLUICE_OK)
+        return st;
 
     struct aiPropertyStore *props = aiCreatePropertyStore();
     if (!props) {
@@ -329,31 +439,74 @@ sluice_status sr_scene_builder_add_mesh_file(sr_scene_builder *b, const char *pa
      * drops the points and lines: a ray tracer has nothing to hit there. */
     aiSetImportPropertyInteger(props, AI_CONFIG_PP_SBP_REMOVE,
                                aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-    const struct aiScene *sc = aiImportFileExWithProperties(
-        path, aiProcess_Triangulate | aiProcess_SortByPType, NULL, props);
+    /* Only ValidateDataStructure while reading: it turns a loader's
+     * inconsistent output (NULL nodes, indices past the vertices) into an
+     * error. The other steps run once check_structure has seen the result:
+     * Debian's assimp is built with its assertions on, and Triangulate
+     * aborts the process on a mesh whose primitive types claim polygons it
+     * does not have (a PLY whose face data is missing). */
+    const struct aiScene *sc =
+        src->path
+            ? aiImportFileExWithProperties(src->path, aiProcess_ValidateDataStructure, NULL, props)
+            : aiImportFileFromMemoryWithProperties(src->data, (unsigned)size,
+                                                   aiProcess_ValidateDataStructure,
+                                                   src->hint ? src->hint : "", props);
     aiReleasePropertyStore(props);
     if (!sc) {
         sr_set_error(err, err_size, "%s: assimp cannot read it: %s", label, aiGetErrorString());
         return SLUICE_ERROR_IO;
     }
-    sluice_status st = check_finite(sc, label, err, err_size);
+    st = check_structure(sc, label, err, err_size);
+    if (st == SLUICE_OK)
+        st = check_surfaces(sc, label, err, err_size);
+    if (st == SLUICE_OK)
+        st = check_finite(sc, label, err, err_size);
+    if (st != SLUICE_OK) {
+        aiReleaseImport(sc);
+        return st;
+    }
+    /* the importer kept the properties (AI_CONFIG_PP_SBP_REMOVE) */
+    sc = aiApplyPostProcessing(sc, aiProcess_Triangulate | aiProcess_SortByPType);
+    if (!sc) {
+        /* not expected after check_surfaces (and on a failure here assimp
+         * 5.2's C API crashes releasing the scene) */
+        sr_set_error(err, err_size, "%s: assimp cannot triangulate it: %s", label,
+                     aiGetErrorString());
+        return SLUICE_ERROR_IO;
+    }
+    st = check_structure(sc, label, err, err_size);
     if (st != SLUICE_OK) {
         aiReleaseImport(sc);
         return st;
     }
     const struct aiScene *joined = aiApplyPostProcessing(sc, aiProcess_JoinIdenticalVertices);
     if (!joined) {
-        /* assimp has released the scene already */
         sr_set_error(err, err_size, "%s: assimp cannot join vertices: %s", label,
                      aiGetErrorString());
         return SLUICE_ERROR_IO;
     }
-    sc = joined;
-    if (!sc->mRootNode) {
-        aiReleaseImport(sc);
+    if (!joined->mRootNode) {
+        aiReleaseImport(joined);
         sr_set_error(err, err_size, "%s: the file has no scene graph", label);
         return SLUICE_ERROR_IO;
     }
+    *out = joined;
+    return SLUICE_OK;
+}
+
+/* Adds a mesh file or buffer: the shared part of the two entry points. */
+static sluice_status add_mesh_source(sr_scene_builder *b, const mesh_source *src,
+                                     const float *transform, const uint32_t *material,
+                                     const char *label, char *err, size_t err_size)
+{
+    if (material && *material >= sr_scene_builder_material_count(b)) {
+        sr_set_error(err, err_size, "%s: material %u out of range", label, *material);
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    const struct aiScene *sc = NULL;
+    sluice_status st = import_scene(src, label, &sc, err, err_size);
+    if (st != SLUICE_OK)
+        return st;
 
     mesh_file f;
     memset(&f, 0, sizeof f);
@@ -385,6 +538,31 @@ sluice_status sr_scene_builder_add_mesh_file(sr_scene_builder *b, const char *pa
     return st;
 }
 
+sluice_status sr_scene_builder_add_mesh_file(sr_scene_builder *b, const char *path,
+                                             const float *transform, const uint32_t *material,
+                                             const char *label, char *err, size_t err_size)
+{
+    if (!b || !path) {
+        sr_set_error(err, err_size, "add_mesh_file: invalid argument");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    mesh_source src = {path, NULL, 0, NULL};
+    return add_mesh_source(b, &src, transform, material, label ? label : path, err, err_size);
+}
+
+sluice_status sr_scene_builder_add_mesh_memory(sr_scene_builder *b, const void *data, size_t size,
+                                               const char *hint, const float *transform,
+                                               const uint32_t *material, const char *label,
+                                               char *err, size_t err_size)
+{
+    if (!b || (!data && size)) {
+        sr_set_error(err, err_size, "add_mesh_memory: invalid argument");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    mesh_source src = {NULL, data, size, hint};
+    return add_mesh_source(b, &src, transform, material, label ? label : "(memory)", err, err_size);
+}
+
 sluice_status sr_scene_load_mesh(const char *path, const sr_scene_load_options *opts,
                                  sr_scene **out, char *err, size_t err_size)
 {
@@ -402,6 +580,7 @@ sluice_status sr_scene_load_mesh(const char *path, const sr_scene_load_options *
     if (opts) {
         sr_scene_builder_set_warning_callback(b, opts->warning, opts->warning_user);
         flags |= opts->flags;
+        sr_scene_builder_set_max_triangles(b, opts->max_triangles);
     }
     sluice_status st = sr_scene_builder_add_mesh_file(b, path, NULL, NULL, path, err, err_size);
     if (st == SLUICE_OK)
