@@ -259,6 +259,7 @@ static void test_furnace_knn(void)
     sluice_stream *photons = NULL;
     size_t n = 0;
     pm_photon_stats ps;
+    memset(&ps, 0, sizeof ps);
     pm_photon_options po = {60000, 64, 3};
     if (st == SLUICE_OK)
         st = pm_photons_trace(ph, &po, &photons, &n, &ps);

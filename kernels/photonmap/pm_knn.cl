@@ -196,7 +196,7 @@ static inline void pm_index(pm_state *st, const pm_knn_params *p, global const f
 
 /* Runs shorter than this are examined one photon at a time: a block's setup
  * and sums cost more than it saves there (glassball, with Purcell's
- * 250x1x250 grid: runs of one cell of a few photons; measured). *
+ * 250x1x250 grid: runs of one cell of a few photons; measured). */
 #define PM_SHORT_RUN 8u
 
 /* Examines the photons map[b .. e) (Purcell Fig. 6.6): in the cell-ordered
