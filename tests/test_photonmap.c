@@ -206,6 +206,7 @@ static void test_cli(const char *exe)
         {"--alpha 1.5", "--alpha"},
         {"--target-error 0", "--target-error"},
         {"--target-error 2", "--target-error"},
+        {"--min-spp 5", "--min-spp"},
         {"--alpha 0", "--alpha"},
         {"--progressive --alpha", "--alpha"},
         {"--frobnicate 1", "--frobnicate"},
@@ -251,6 +252,20 @@ static void test_cli(const char *exe)
                      &r0, &r3) == 3 &&
               fabs(r3 * r3 / (r0 * r0) - (1 + a) / 2 * (2 + a) / 3 * (3 + a) / 4) < 1e-4,
           "progressive radius: %s", out);
+    /* progressive to a target error: tiles stop, the statistics say so */
+    snprintf(cmd, sizeof cmd,
+             "%s --scene glassball --size 32x24 --photons 1000 --progressive --target-error 0.01 "
+             "--out pm_cli.png --stats pm_ppm.json --quiet",
+             exe);
+    CHECK(check_run(cmd, out, sizeof out) == 0 && strstr(out, "target 0.01 reached"),
+          "--progressive --target-error: %s", out);
+    f = fopen("pm_ppm.json", "r");
+    n = f ? fread(out, 1, sizeof out - 1, f) : 0;
+    out[n] = '\0';
+    if (f)
+        fclose(f);
+    CHECK(strstr(out, "\"sampling\": {\"target\": 0.01, \"adaptive\": true"),
+          "--target-error stats JSON: %s", out);
     /* intermediate images: pm_pass-0000.png on; a folder that does not
      * exist is an error naming the file */
     remove("pm_pass-0000.png");

@@ -744,6 +744,9 @@ static void test_cli(const char *exe)
         {"--frobnicate 1", "--frobnicate"},
         {"--out x.png --scene", "--scene"},
         {"--scene no-such-scene-file.obj", "no-such-scene-file.obj"},
+        {"--min-spp 3", "--min-spp"},
+        {"--min-spp 0", "--min-spp"},
+        {"--target-error -1", "--target-error"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; ++i) {
         snprintf(cmd, sizeof cmd, "%s %s --out cli_bad.png", exe, bad[i].args);
@@ -775,6 +778,23 @@ static void test_cli(const char *exe)
     CHECK(sr_image_read("cli_ok.exr", &img, err, sizeof err) == SLUICE_OK, "%s", err);
     CHECK(img && sr_image_width(img) == 32 && sr_image_height(img) == 24, "image size");
     sr_image_destroy(img);
+
+    /* a target error: the statistics say what adaptive sampling skipped */
+    snprintf(cmd, sizeof cmd,
+             "%s --scene cornell --mode path --size 32x32 --light-samples 1 --target-error 0.02 "
+             "--exec fused --out cli_ok.exr --stats cli_ok.json --no-profile",
+             exe);
+    CHECK(check_run(cmd, out, sizeof out) == 0 && strstr(out, "sampling: target relMSE 0.02") &&
+              strstr(out, "target 0.02 reached"),
+          "--target-error: %s", out);
+    f = fopen("cli_ok.json", "r");
+    if (f) {
+        size_t n = fread(out, 1, sizeof out - 1, f);
+        out[n] = '\0';
+        fclose(f);
+    }
+    CHECK(f && strstr(out, "\"sampling\": {\"target\": 0.02, \"adaptive\": true"),
+          "--target-error stats JSON: %s", out);
 
     /* Ctrl-C: finish the sample, write the image, exit 130 */
     remove("cli_int.exr");

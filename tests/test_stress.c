@@ -15,9 +15,6 @@
  *   furnace_progressive progressive photon mapping on the same sphere: its
  *                       RMS error falls with samples (bound: 16 samples
  *                       below 0.6 of 1; theory 0.40), mean within 1%
- *   target_error        --target-error's estimate (from the render itself)
- *                       against the true relMSE on the furnace: within a
- *                       factor of 2
  *   accumulation        10^6 samples per pixel through the film's 64-bit fixed
  *                       point against a double sum: within one quantum
  *                       (2^-24) of the mean; a float sum's drift is printed
@@ -38,6 +35,8 @@
  */
 #include "check.h"
 #include "film.h"
+#include "film_program.h"
+#include "furnace.h"
 #include "image.h"
 #include "image_metrics.h"
 #include "knn.h"
@@ -45,7 +44,6 @@
 #include "point_grid.h"
 #include "kernels.h"
 #include "photonmap.h"
-#include "progressive.h"
 #include "render.h"
 #include "scene.h"
 #include "scene_copy.h"
@@ -57,8 +55,6 @@
 #include <string.h>
 
 static sluice_context *ctx;
-
-#define PI_D 3.14159265358979323846
 
 /* Renders `spp` samples of `mode` and returns the image (NULL on failure,
  * after a failed check); counts non-finite pixels and contributions. */
@@ -135,46 +131,6 @@ static double image_mean(const sr_image *img, int channel)
 /* ------------------------------------------------------------------ */
 /* Furnaces                                                            */
 /* ------------------------------------------------------------------ */
-
-/* A closed diffuse sphere of radius R and albedo a (a geodesic sphere of
- * 20 * 48^2 facets with radial normals: its facets lie within 0.02% of the
- * sphere) with a point light of intensity I at its centre and the camera
- * there too. The irradiance of every wall point is I / R^2 direct plus, as
- * each bounce spreads a times the light evenly over a sphere, I / R^2 *
- * a / (1 - a) indirect: the radiance seen is a / pi * I / R^2 / (1 - a). */
-static const float furnace_R = 2.0f, furnace_a = 0.5f, furnace_I = 3.0f;
-
-static sr_scene *furnace_scene(void)
-{
-    char err[512] = "";
-    sr_scene_builder *b = NULL;
-    sr_scene *scene = NULL;
-    sluice_status st = sr_scene_builder_create("furnace", &b);
-    sr_material m = sr_material_make(SR_MATERIAL_DIFFUSE, "wall");
-    m.albedo[0] = m.albedo[1] = m.albedo[2] = furnace_a;
-    uint32_t mi = 0;
-    const float c[3] = {0, 0, 0};
-    sr_point_light l = {{0, 0, 0}, {furnace_I, furnace_I, furnace_I}};
-    if (st == SLUICE_OK)
-        st = sr_scene_builder_add_material(b, &m, &mi, err, sizeof err);
-    if (st == SLUICE_OK)
-        st = sr_scene_builder_add_sphere(b, c, furnace_R, 48, mi, NULL, err, sizeof err);
-    if (st == SLUICE_OK)
-        st = sr_scene_builder_add_point_light(b, &l, err, sizeof err);
-    sr_camera cam = {{0, 0, 0}, {0.3f, 0.2f, 1}, {0, 1, 0}, 90.0f, 32, 32};
-    if (st == SLUICE_OK)
-        st = sr_scene_builder_set_camera(b, &cam, err, sizeof err);
-    if (st == SLUICE_OK)
-        st = sr_scene_builder_finish(b, 0, &scene, err, sizeof err);
-    sr_scene_builder_destroy(b);
-    CHECK(st == SLUICE_OK, "furnace scene: %s", err);
-    return scene;
-}
-
-static double furnace_radiance(void)
-{
-    return furnace_a / PI_D * furnace_I / (furnace_R * furnace_R) / (1.0 - furnace_a);
-}
 
 static void test_furnace_path(void)
 {
@@ -399,79 +355,6 @@ static void test_furnace_progressive(void)
     sr_scene_destroy(s);
 }
 
-/* --target-error's estimate against the truth: the path-traced furnace
- * rendered until the relMSE estimated from the render itself (the image
- * after n samples against the one after 2n) is at most 1e-3; its true
- * relMSE against the analytic image must then be within a factor of 2 of
- * the target (the estimate is itself noisy: a factor of 2 either way). */
-typedef struct target_run {
-    rt_renderer *r;
-} target_run;
-
-static sluice_status target_step(void *user)
-{
-    return rt_renderer_sample(((target_run *)user)->r);
-}
-
-static sluice_status target_resolve(void *user, sr_image *img)
-{
-    return rt_renderer_image(((target_run *)user)->r, img, NULL);
-}
-
-static void test_target_error(void)
-{
-    sr_scene *s = furnace_scene();
-    if (!s)
-        return;
-    char err[512] = "";
-    rt_tracer_options to = rt_tracer_options_default();
-    to.exec = RT_EXEC_FUSED;
-    rt_tracer *t = NULL;
-    target_run u = {NULL};
-    sr_image *img = NULL, *truth = NULL;
-    sluice_status st = rt_tracer_create(ctx, s, &to, &t, err, sizeof err);
-    rt_render_options o;
-    memset(&o, 0, sizeof o);
-    o.mode = RT_MODE_PATH;
-    o.width = 32;
-    o.height = 32;
-    o.max_depth = 64;
-    o.light_samples = 1;
-    o.seed = 3;
-    if (st == SLUICE_OK)
-        st = rt_renderer_create(t, &o, &u.r, err, sizeof err);
-    const double target = 1e-3;
-    sr_progressive p = {"samples", 4096, 0, 0, 0, NULL, target, target_resolve, 32, 32};
-    sr_progressive_result res;
-    if (st == SLUICE_OK)
-        st = sr_progressive_run(&p, target_step, NULL, &u, &res);
-    if (st == SLUICE_OK)
-        st = sr_image_create(32, 32, 3, &img, err, sizeof err);
-    if (st == SLUICE_OK)
-        st = sr_image_create(32, 32, 3, &truth, err, sizeof err);
-    if (st == SLUICE_OK)
-        st = rt_renderer_image(u.r, img, NULL);
-    CHECK(st == SLUICE_OK, "target error: %s %s", err, sluice_context_error(ctx));
-    if (st == SLUICE_OK) {
-        float *q = sr_image_pixels(truth);
-        for (size_t i = 0; i < 32 * 32 * 3; ++i)
-            q[i] = (float)furnace_radiance();
-        sr_image_metrics m;
-        sr_image_compare(img, truth, &m, err, sizeof err);
-        printf("target relMSE %g: stopped after %u samples at an estimate of %.3g; true relMSE "
-               "%.3g (bound: within a factor of 2 of the target)\n",
-               target, res.done, res.error, m.rel_mse);
-        CHECK(res.converged && m.rel_mse <= 2 * target && m.rel_mse >= target / 8,
-              "target error: converged %d after %u, estimate %g, true %g", res.converged, res.done,
-              res.error, m.rel_mse);
-    }
-    sr_image_destroy(img);
-    sr_image_destroy(truth);
-    rt_renderer_destroy(u.r);
-    rt_tracer_destroy(t);
-    sr_scene_destroy(s);
-}
-
 /* ------------------------------------------------------------------ */
 /* Accumulation                                                        */
 /* ------------------------------------------------------------------ */
@@ -506,30 +389,12 @@ static void test_accumulation(void)
 {
     enum { W = 8, H = 4 };
     const uint32_t samples = 1000000;
-    const char *parts[] = {"rt_types.h", "film.cl"};
-    size_t len = strlen("#include \"sluice.cl\"\n") + sizeof accumulate_cl;
-    for (int i = 0; i < 2; ++i)
-        len += strlen(sr_kernel_text(parts[i])) + 1;
-    char *src = malloc(len);
-    if (!src) {
-        CHECK(0, "out of memory");
-        return;
-    }
-    strcpy(src, "#include \"sluice.cl\"\n");
-    for (int i = 0; i < 2; ++i) {
-        strcat(src, sr_kernel_text(parts[i]));
-        strcat(src, "\n");
-    }
-    strcat(src, accumulate_cl);
     sluice_program *prog = NULL;
     sluice_kernel *k = NULL;
     sr_film *film = NULL;
     sr_image *img = NULL;
     char err[256] = "";
-    sluice_status st = sluice_program_create_source(ctx, "accumulate.cl", src, NULL, &prog);
-    free(src);
-    if (st == SLUICE_OK)
-        st = sluice_program_build(prog);
+    sluice_status st = film_program_create(ctx, "accumulate.cl", accumulate_cl, &prog);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(prog, "accumulate", &k);
     if (st == SLUICE_OK)
@@ -792,7 +657,6 @@ int main(void)
     test_furnace_path();
     test_furnace_photonmap();
     test_furnace_progressive();
-    test_target_error();
     test_scaled_translated();
     test_grazing();
     test_leaks();

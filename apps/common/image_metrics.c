@@ -77,13 +77,3 @@ sluice_status sr_image_compare(const sr_image *a, const sr_image *b, sr_image_me
     m->channels = nc;
     return SLUICE_OK;
 }
-
-sluice_status sr_image_half_rel_mse(const sr_image *half, const sr_image *all, double *rel_mse,
-                                    char *err, size_t err_size)
-{
-    sr_image_metrics m;
-    sluice_status st = sr_image_compare(half, all, &m, err, err_size);
-    if (rel_mse)
-        *rel_mse = st == SLUICE_OK ? m.rel_mse : 0.0;
-    return st;
-}

@@ -54,20 +54,6 @@ typedef struct sr_image_metrics {
 sluice_status sr_image_compare(const sr_image *a, const sr_image *b, sr_image_metrics *m, char *err,
                                size_t err_size);
 
-/**
- * Estimates the rel_mse of a render against its own converged image, from
- * the render alone: `half` is the mean of its first n samples and `all` the
- * mean of all 2n. The second half's mean is b = 2 all - half, independent of
- * the first, so (half - b)^2 / 4 estimates the variance of `all` per value,
- * and the estimate is sum( (half - b)^2 / 4 / (all^2 + 0.01) ) / N; as
- * half - b = 2 (half - all), that is the rel_mse of `half` against `all`.
- * It measures noise only, not bias (an unbiased render's error is its
- * noise). Invalid values are left out as in sr_image_compare. Fails as it
- * does.
- */
-sluice_status sr_image_half_rel_mse(const sr_image *half, const sr_image *all, double *rel_mse,
-                                    char *err, size_t err_size);
-
 #ifdef __cplusplus
 }
 #endif

@@ -197,9 +197,7 @@ static sluice_status sample(void *user)
 static sluice_status write_image(run *u, size_t *bad)
 {
     char err[512] = "";
-    const pm_stats *s = pm_renderer_stats(u->r);
-    sluice_status st = sr_film_write(pm_renderer_film(u->r), 1.0 / (s->samples ? s->samples : 1),
-                                     u->out, bad, err, sizeof err);
+    sluice_status st = rt_renderer_write(pm_renderer_whitted(u->r), u->out, bad, err, sizeof err);
     if (st != SLUICE_OK)
         fprintf(stderr, PROG ": writing %s: %s\n", u->out, err[0] ? err : sluice_status_string(st));
     return st;
@@ -210,11 +208,12 @@ static sluice_status checkpoint(void *user)
     return write_image(user, NULL);
 }
 
-static sluice_status resolve(void *user, sr_image *img)
+static int estimate(void *user, double *error)
 {
     run *u = user;
-    const pm_stats *s = pm_renderer_stats(u->r);
-    return sr_film_resolve(pm_renderer_film(u->r), s->samples ? 1.0 / s->samples : 1.0, img, NULL);
+    rt_renderer *w = pm_renderer_whitted(u->r);
+    *error = rt_renderer_sampling(w)->error;
+    return rt_renderer_done(w);
 }
 
 /* --pass-images: the pattern with -NNNN before its extension. */
@@ -300,6 +299,7 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
                     "r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1))\n",
                     (double)o->alpha, (double)s->radius, (double)s->radius0);
         fprintf(f, "skipped: %s\n", pm_renderer_skipped(r));
+        sr_adaptive_print(rt_renderer_sampling(pm_renderer_whitted(r)), f);
         if (sluice_profile_enabled(ctx))
             sluice_profile_print(ctx, f);
         return;
@@ -349,6 +349,8 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
             (unsigned long long)rs->rays[RT_KIND_REFRACT], (unsigned long long)ts->rays);
     fprintf(f, "  \"pass_images\": {\"count\": %u, \"seconds\": %.6f},\n", s->pass_images,
             s->pass_images_s);
+    sr_adaptive_write_json(rt_renderer_sampling(pm_renderer_whitted(r)), f, 2);
+    fprintf(f, ",\n");
     fprintf(f, "  \"skipped\": \"%s\"\n}\n", pm_renderer_skipped(r));
 }
 
@@ -370,6 +372,7 @@ int main(int argc, char **argv)
     o->width = cc->width ? cc->width : cam->width;
     o->height = cc->height ? cc->height : cam->height;
     o->seed = cc->seed;
+    o->sampling = sr_cli_sampling(cc);
     if (!c.have_photons && rs->photons)
         o->photons = rs->photons;
     if (!c.have_k && rs->photon_lookup)
@@ -411,9 +414,8 @@ int main(int argc, char **argv)
     memset(&u, 0, sizeof u);
     u.r = r;
     u.out = cc->out;
-    sr_progressive prog = {"samples",    spp,      cc->time_limit,   cc->checkpoint,
-                           cc->progress, stderr,   cc->target_error, resolve,
-                           o->width,     o->height};
+    sr_progressive prog = {"samples",    spp,    cc->time_limit,   cc->checkpoint,
+                           cc->progress, stderr, cc->target_error, estimate};
     sr_progressive_result pr;
     st = sr_progressive_run(&prog, sample, checkpoint, &u, &pr);
     if (st != SLUICE_OK)

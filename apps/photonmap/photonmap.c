@@ -157,8 +157,8 @@ static sluice_status preview_pass(void *user, unsigned pass, size_t answered)
     if (st == SLUICE_OK)
         st = add_estimates(r, r->preview_points, sr_film_accum(r->preview), answered);
     if (st == SLUICE_OK)
-        st = sr_film_resolve_sum(film, r->preview, 1.0 / (double)(r->stats.samples + 1),
-                                 r->preview_img, NULL);
+        st = sr_film_resolve_tiles(film, r->preview, rt_renderer_tile_samples(r->whitted),
+                                   r->preview_img, NULL, NULL);
     if (st != SLUICE_OK) {
         sr_set_error(r->err, r->err_size, "intermediate image: %s",
                      st == SLUICE_ERROR_OUT_OF_MEMORY ? "out of memory"
@@ -206,6 +206,7 @@ sluice_status pm_renderer_create(sluice_context *ctx, const sr_scene *scene, con
     ro.seed = opt->seed;
     ro.gather = gather;
     ro.gather_user = r;
+    ro.sampling = opt->sampling;
     if (st == SLUICE_OK)
         st = rt_renderer_create(r->tracer, &ro, &r->whitted, err, err_size);
     if (st == SLUICE_OK)

@@ -57,6 +57,9 @@ typedef struct pm_options {
      *  samples, and its bias and noise both vanish as samples grow. */
     int progressive;
     float alpha; /**< progressive radius reduction, 0 < alpha < 1 (2/3) */
+    /** Adaptive sampling and the target error of the eye pass (adaptive.h):
+     *  tiles that stopped take no eye rays and no radiance estimates. */
+    sr_adaptive_options sampling;
 } pm_options;
 
 /** Defaults: 512x384, seed 1, 1 light sample, depth 5, 16,000 photons,

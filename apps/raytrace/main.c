@@ -167,10 +167,7 @@ static sluice_status sample(void *user)
 static sluice_status write_image(run *r, size_t *bad_pixels)
 {
     char err[512] = "";
-    const rt_render_stats *rs = rt_renderer_stats(r->rend);
-    sluice_status st =
-        sr_film_write(rt_renderer_film(r->rend), 1.0 / (rs->samples ? rs->samples : 1), r->out,
-                      bad_pixels, err, sizeof err);
+    sluice_status st = rt_renderer_write(r->rend, r->out, bad_pixels, err, sizeof err);
     if (st != SLUICE_OK)
         fprintf(stderr, PROG ": writing %s: %s\n", r->out, err[0] ? err : sluice_status_string(st));
     return st;
@@ -181,10 +178,11 @@ static sluice_status checkpoint(void *user)
     return write_image(user, NULL);
 }
 
-static sluice_status resolve(void *user, sr_image *img)
+static int estimate(void *user, double *error)
 {
     run *r = user;
-    return rt_renderer_image(r->rend, img, NULL);
+    *error = rt_renderer_sampling(r->rend)->error;
+    return rt_renderer_done(r->rend);
 }
 
 int main(int argc, char **argv)
@@ -234,6 +232,7 @@ int main(int argc, char **argv)
     ro.max_depth = c.have_depth ? c.max_depth : rs->max_depth;
     ro.light_samples = c.have_ls ? c.light_samples : (rs->light_samples ? rs->light_samples : 1);
     ro.seed = cc->seed;
+    ro.sampling = sr_cli_sampling(cc);
     unsigned spp = c.have_spp ? c.spp : (rs->samples_per_pixel ? rs->samples_per_pixel : 1);
     if ((cc->time_limit > 0 || cc->target_error > 0) && !c.have_spp)
         spp = 1u << 20; /* as many as the time or the target allows */
@@ -259,9 +258,8 @@ int main(int argc, char **argv)
     if (cc->profile)
         sluice_profile_reset(ctx);
     run r = {rend, cc->out, ctx};
-    sr_progressive prog = {"samples",    spp,      cc->time_limit,   cc->checkpoint,
-                           cc->progress, stderr,   cc->target_error, resolve,
-                           ro.width,     ro.height};
+    sr_progressive prog = {"samples",    spp,    cc->time_limit,   cc->checkpoint,
+                           cc->progress, stderr, cc->target_error, estimate};
     sr_progressive_result pr;
     st = sr_progressive_run(&prog, sample, checkpoint, &r, &pr);
     if (st != SLUICE_OK)
@@ -289,6 +287,7 @@ int main(int argc, char **argv)
     rep.bad_pixels = bad_pixels;
     rep.trace = rt_tracer_stats(tracer);
     rep.render = rt_renderer_stats(rend);
+    rep.sampling = rt_renderer_sampling(rend);
     rep.grid = rt_tracer_grid(tracer);
     rep.scene_bytes = rt_tracer_scene_bytes(tracer);
     rep.tracer_stream_bytes = rt_tracer_stream_bytes(tracer);

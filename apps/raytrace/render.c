@@ -27,6 +27,7 @@ struct rt_renderer {
     sluice_kernel *k_raygen, *k_shade, *k_resolve;
     sluice_counters *counters;
     sr_film *film;
+    sr_adaptive *sampling;
     sluice_stream *rays, *next, *hits, *shadow, *shadow_hits;
     sluice_stream *gather; /* rt_gather (one record when not gathering) */
     char skipped[384];
@@ -44,6 +45,7 @@ void rt_renderer_destroy(rt_renderer *r)
     sluice_program_destroy(r->program);
     sluice_counters_destroy(r->counters);
     sr_film_destroy(r->film);
+    sr_adaptive_destroy(r->sampling);
     sluice_stream *s[] = {r->rays, r->next, r->hits, r->shadow, r->shadow_hits, r->gather};
     for (size_t i = 0; i < sizeof s / sizeof *s; ++i)
         sluice_stream_destroy(s[i]);
@@ -180,6 +182,11 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
         st = sluice_stream_create(ctx, sizeof(rt_gather), opt->gather ? pixels : 1, &r->gather);
     if (st == SLUICE_OK)
         st = sr_film_create(ctx, opt->width, opt->height, &r->film, NULL, 0);
+    if (st == SLUICE_OK && (st = sr_adaptive_create(ctx, opt->width, opt->height, &opt->sampling,
+                                                    &r->sampling, err, err_size)) != SLUICE_OK) {
+        rt_renderer_destroy(r);
+        return st;
+    }
     if (st == SLUICE_OK)
         st = sluice_kernel_set_counters(r->k_shade, r->counters);
     if (st == SLUICE_OK)
@@ -271,20 +278,26 @@ sluice_status rt_renderer_sample(rt_renderer *r)
 {
     if (!r)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (rt_renderer_done(r) || sr_adaptive_active_tiles(r->sampling) == 0)
+        return SLUICE_OK;
     rt_tracer *t = r->t;
-    r->frame.sample = r->stats.samples;
-    /* the first sample goes through pixel centres, later ones are jittered */
-    r->frame.jitter = r->stats.samples > 0;
     size_t w = r->opt.width, h = r->opt.height;
-    size_t tiles = ((w + 7) / 8) * ((h + 7) / 8);
+    size_t tiles = sr_adaptive_active_tiles(r->sampling);
+    size_t n = sr_adaptive_active_pixels(r->sampling);
+    unsigned s = sr_adaptive_begin_sample(r->sampling);
+    r->frame.sample = s;
+    /* the first sample goes through pixel centres, later ones are jittered */
+    r->frame.jitter = s > 0;
+    r->frame.film_half = (s & 1u) ? (rt_u32)(w * h) : 0u;
     sluice_status st = sluice_stream_clear(r->rays);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_output(r->k_raygen, 0, 0, r->rays, SLUICE_ORDERED);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(r->k_raygen, 1, sizeof r->frame, &r->frame);
     if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(r->k_raygen, 2, sr_adaptive_tile_list(r->sampling), 0);
+    if (st == SLUICE_OK)
         st = sluice_kernel_launch_count(r->k_raygen, tiles * 64);
-    size_t n = w * h;
     r->stats.rays[RT_KIND_EYE] += n;
     while (st == SLUICE_OK && n) {
         r->stats.waves++;
@@ -314,8 +327,15 @@ sluice_status rt_renderer_sample(rt_renderer *r)
         st = rt_tracer_collect_maxima(t);
     if (st == SLUICE_OK)
         r->stats.samples++;
+    if (st == SLUICE_OK)
+        st = sr_adaptive_check(r->sampling, r->film, NULL);
     update_bytes(r);
     return st;
+}
+
+int rt_renderer_done(const rt_renderer *r)
+{
+    return r && sr_adaptive_done(r->sampling);
 }
 
 sluice_status rt_renderer_image(rt_renderer *r, sr_image *img, size_t *bad_pixels)
@@ -324,8 +344,29 @@ sluice_status rt_renderer_image(rt_renderer *r, sr_image *img, size_t *bad_pixel
         *bad_pixels = 0;
     if (!r)
         return SLUICE_ERROR_INVALID_ARGUMENT;
-    return sr_film_resolve(r->film, 1.0 / (r->stats.samples ? r->stats.samples : 1), img,
-                           bad_pixels);
+    return sr_film_resolve_tiles(r->film, NULL, sr_adaptive_tile_samples(r->sampling), img, NULL,
+                                 bad_pixels);
+}
+
+sluice_status rt_renderer_write(rt_renderer *r, const char *path, size_t *bad_pixels, char *err,
+                                size_t err_size)
+{
+    if (!r) {
+        sr_set_error(err, err_size, "rt_renderer_write: NULL renderer");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    return sr_film_write(r->film, sr_adaptive_tile_samples(r->sampling), path, bad_pixels, err,
+                         err_size);
+}
+
+const uint32_t *rt_renderer_tile_samples(const rt_renderer *r)
+{
+    return r ? sr_adaptive_tile_samples(r->sampling) : NULL;
+}
+
+const sr_adaptive_stats *rt_renderer_sampling(const rt_renderer *r)
+{
+    return r ? sr_adaptive_statistics(r->sampling) : NULL;
 }
 
 sr_film *rt_renderer_film(rt_renderer *r)

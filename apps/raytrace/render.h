@@ -16,6 +16,7 @@
 #ifndef SLUICE_RT_RENDER_H
 #define SLUICE_RT_RENDER_H
 
+#include "adaptive.h"
 #include "image.h"
 #include "camera.h"
 #include "film.h"
@@ -35,6 +36,9 @@ typedef struct rt_render_options {
      *  before the stream is reused. Returning an error stops the sample. */
     sluice_status (*gather)(void *user, sluice_stream *points, size_t n);
     void *gather_user;
+    /** Adaptive sampling and the target error (adaptive.h); all zero:
+     *  every pixel takes every sample. */
+    sr_adaptive_options sampling;
 } rt_render_options;
 
 /** Per-kind ray counts and shading work (Purcell Table 5.2). */
@@ -42,7 +46,7 @@ typedef struct rt_render_stats {
     uint64_t rays[RT_KIND_COUNT]; /**< rays made, by RT_KIND_* */
     uint64_t shades;              /**< shading calculations (hits shaded) */
     uint64_t nonfinite;           /**< contributions dropped as NaN or Inf */
-    unsigned samples;             /**< samples per pixel done */
+    unsigned samples;             /**< samples done (by the tiles that took most) */
     unsigned waves;               /**< ray waves traced (eye + secondary) */
     size_t stream_bytes;          /**< device bytes of the ray, hit and image streams */
 } rt_render_stats;
@@ -56,13 +60,30 @@ sluice_status rt_renderer_create(rt_tracer *tracer, const rt_render_options *opt
 /** Frees it (NULL is fine). */
 void rt_renderer_destroy(rt_renderer *r);
 
-/** Renders one more sample per pixel. Errors are the context's. */
+/** Renders one more sample per pixel of the tiles still taking samples
+ * (all of them without adaptive sampling), then checks the estimate when
+ * one is due (sr_adaptive_check). Does nothing once rt_renderer_done. Errors
+ * are the context's. */
 sluice_status rt_renderer_sample(rt_renderer *r);
 
-/** Writes the mean of the samples so far into `img` (RGB, the renderer's
- *  size). Counts pixels that would not be finite (none should be) in
- *  `*bad_pixels` (may be NULL) and writes 0 there instead. */
+/** Non-zero once the target error is reached (never without one). */
+int rt_renderer_done(const rt_renderer *r);
+
+/** Writes the mean of each pixel's samples so far into `img` (RGB, the
+ *  renderer's size). Counts pixels that would not be finite (none should
+ *  be) in `*bad_pixels` (may be NULL) and writes 0 there instead. */
 sluice_status rt_renderer_image(rt_renderer *r, sr_image *img, size_t *bad_pixels);
+
+/** rt_renderer_image written to `path` (.png, .exr, .hdr); `err` says why
+ *  it failed. */
+sluice_status rt_renderer_write(rt_renderer *r, const char *path, size_t *bad_pixels, char *err,
+                                size_t err_size);
+
+/** Samples per tile so far (sr_film_resolve_tiles). */
+const uint32_t *rt_renderer_tile_samples(const rt_renderer *r);
+
+/** What adaptive sampling did (the estimates, the work skipped). */
+const sr_adaptive_stats *rt_renderer_sampling(const rt_renderer *r);
 
 /** The film the samples accumulate in (its scale is 1 / samples). */
 sr_film *rt_renderer_film(rt_renderer *r);

@@ -54,6 +54,8 @@ void rt_stats_print(const rt_stats_report *r, sluice_context *ctx, FILE *out)
     if (r->fused_path && r->fused_path[0])
         fprintf(out, "fused traversal: %s\n", r->fused_path);
     fprintf(out, "skipped: %s\n", r->skipped && r->skipped[0] ? r->skipped : "nothing");
+    if (r->sampling)
+        sr_adaptive_print(r->sampling, out);
     fprintf(out, "non-finite contributions dropped: %llu, non-finite pixels: %zu\n",
             (unsigned long long)r->render->nonfinite, r->bad_pixels);
     if (ctx && sluice_profile_enabled(ctx))
@@ -124,7 +126,12 @@ sluice_status rt_stats_write_json(const rt_stats_report *r, sluice_context *ctx,
     json_string(f, r->fused_path ? r->fused_path : "");
     fprintf(f, ",\n  \"skipped\": ");
     json_string(f, r->skipped);
-    fprintf(f, ",\n  \"kernels\": [");
+    fprintf(f, ",\n");
+    if (r->sampling) {
+        sr_adaptive_write_json(r->sampling, f, 2);
+        fprintf(f, ",\n");
+    }
+    fprintf(f, "  \"kernels\": [");
     size_t nk = ctx && sluice_profile_enabled(ctx) ? sluice_profile_count(ctx) : 0;
     for (size_t i = 0; i < nk; ++i) {
         sluice_profile_entry e;

@@ -25,6 +25,7 @@ typedef struct rt_stats_report {
     size_t bad_pixels; /* non-finite pixels found when writing the image */
     const rt_trace_stats *trace;
     const rt_render_stats *render;
+    const sr_adaptive_stats *sampling;
     const rt_grid_device *grid;
     size_t scene_bytes, tracer_stream_bytes;
     const char *skipped;

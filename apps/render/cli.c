@@ -25,6 +25,7 @@ void sr_cli_common_init(sr_cli_common *c)
     c->out = "out.png";
     c->seed = 1;
     c->profile = 1;
+    c->adaptive = 1;
 }
 
 int sr_cli_bad(const char *prog, const char *opt, const char *value, const char *why)
@@ -104,9 +105,13 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
         c->profile = 0;
         return 1;
     }
-    static const char *const valued[] = {"--scene",        "--out",  "--stats",      "--device",
-                                         "--size",         "--seed", "--checkpoint", "--time",
-                                         "--target-error", NULL};
+    if (!strcmp(a, "--no-adaptive")) {
+        c->adaptive = 0;
+        return 1;
+    }
+    static const char *const valued[] = {
+        "--scene",      "--out",  "--stats",        "--device",  "--size", "--seed",
+        "--checkpoint", "--time", "--target-error", "--min-spp", NULL};
     int which = sr_cli_choice(a, valued);
     if (which < 0)
         return 0;
@@ -143,9 +148,13 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
         if (!sr_cli_double(v, 1e-3, 1e7, &c->time_limit))
             return sr_cli_bad(prog, a, v, "expected seconds, from 0.001 to 10000000");
         break;
-    default:
+    case 8:
         if (!sr_cli_double(v, 1e-12, 1.0, &c->target_error))
             return sr_cli_bad(prog, a, v, "expected a relMSE above 0 and at most 1");
+        break;
+    default:
+        if (!sr_cli_uint(v, 2, 1u << 20, &c->min_samples) || c->min_samples % 2)
+            return sr_cli_bad(prog, a, v, "expected an even number from 2 to 1048576");
         break;
     }
     return 1;
@@ -180,9 +189,12 @@ void sr_cli_common_usage(FILE *out)
           "  --time SECONDS           stop after this much rendering time (the image so far\n"
           "                           is written; at least one sample or pass runs)\n"
           "  --target-error E         stop once the image's relMSE, estimated from the\n"
-          "                           render itself (the image after n samples against the\n"
-          "                           one after 2n: noise, not bias), is at most E; checked\n"
-          "                           at 2, 4, 8, ... samples (with no --spp: up to 2^20)\n"
+          "                           render itself (all samples against the odd ones:\n"
+          "                           noise, not bias), is at most E (with no --spp: up to\n"
+          "                           2^20 samples). 8x8 tiles whose own estimate reaches E\n"
+          "                           stop taking samples (adaptive sampling)\n"
+          "  --no-adaptive            with --target-error, every pixel takes every sample\n"
+          "  --min-spp N              samples before the first estimate (even, default 8)\n"
           "  --device NAME            OpenCL device (substring of \"platform / device\")\n"
           "  --no-profile             do not time kernels\n"
           "  --quiet                  no statistics table\n"
@@ -215,6 +227,12 @@ int sr_cli_load_scene(const char *prog, const sr_cli_common *c, sr_scene **out)
         return 1;
     }
     return 0;
+}
+
+sr_adaptive_options sr_cli_sampling(const sr_cli_common *c)
+{
+    sr_adaptive_options o = {c->target_error, c->adaptive, c->min_samples};
+    return o;
 }
 
 int sr_cli_context(const char *prog, const sr_cli_common *c, sluice_context **out)

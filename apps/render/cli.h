@@ -8,6 +8,7 @@
 #ifndef SR_CLI_H
 #define SR_CLI_H
 
+#include "adaptive.h"
 #include "scene.h"
 #include "sluice/sluice.h"
 
@@ -24,6 +25,8 @@ typedef struct sr_cli_common {
     unsigned checkpoint;    /**< --checkpoint N; 0: none */
     double time_limit;      /**< --time SECONDS; 0: none */
     double target_error;    /**< --target-error E (relMSE); 0: none */
+    int adaptive;           /**< 0 after --no-adaptive (1 by default) */
+    unsigned min_samples;   /**< --min-spp N before adaptive checks; 0: 8 */
     int progress;           /**< --progress */
     int profile;            /**< 1 unless --no-profile */
     int quiet;              /**< --quiet */
@@ -55,6 +58,10 @@ int sr_cli_image_path(const char *prog, const char *opt, const char *path);
  *  tree's scenes/. 0 on success, else 1 after printing
  *  "PROG: --scene NAME: why". */
 int sr_cli_load_scene(const char *prog, const sr_cli_common *c, sr_scene **out);
+
+/** The sampling options of sr_adaptive (adaptive.h) that --target-error,
+ *  --no-adaptive and --min-spp give. */
+sr_adaptive_options sr_cli_sampling(const sr_cli_common *c);
 
 /** Creates the OpenCL context for --device and --no-profile. 0 on success,
  *  else 1 after printing "PROG: OpenCL: why". */

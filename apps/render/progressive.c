@@ -1,7 +1,6 @@
 /* See progressive.h. POSIX: sigaction and isatty. */
 #include "progressive.h"
 #include "clock.h"
-#include "image_metrics.h"
 
 #include <signal.h>
 #include <string.h>
@@ -67,16 +66,8 @@ sluice_status sr_progressive_run(const sr_progressive *p, sr_step_fn step,
     memset(res, 0, sizeof *res);
     res->error = -1.0;
     if (!p || !step || p->total == 0 || !(p->time_limit >= 0) || !(p->target_error >= 0) ||
-        (p->target_error > 0 && (!p->resolve || !p->width || !p->height)))
+        (p->target_error > 0 && !p->estimate))
         return SLUICE_ERROR_INVALID_ARGUMENT;
-    /* the target: the image after n steps (half) against the one after 2n */
-    sr_image *half = NULL, *all = NULL;
-    if (p->target_error > 0 &&
-        (sr_image_create(p->width, p->height, 3, &half, NULL, 0) != SLUICE_OK ||
-         sr_image_create(p->width, p->height, 3, &all, NULL, 0) != SLUICE_OK)) {
-        sr_image_destroy(half);
-        return SLUICE_ERROR_OUT_OF_MEMORY;
-    }
     FILE *out = p->out ? p->out : stderr;
     const char *unit = p->unit ? p->unit : "steps";
     sr_progress_install_sigint();
@@ -98,19 +89,9 @@ sluice_status sr_progressive_run(const sr_progressive *p, sr_step_fn step,
             res->interrupted = 1;
             break;
         }
-        if (half && (res->done & (res->done - 1)) == 0) { /* a power of two */
-            if ((st = p->resolve(user, all)) != SLUICE_OK)
-                break;
-            if (res->done >= 2 &&
-                (st = sr_image_half_rel_mse(half, all, &res->error, NULL, 0)) != SLUICE_OK)
-                break;
-            if (res->done >= 2 && res->error <= p->target_error) {
-                res->converged = 1;
-                break;
-            }
-            sr_image *t = half;
-            half = all;
-            all = t;
+        if (p->target_error > 0 && p->estimate(user, &res->error)) {
+            res->converged = 1;
+            break;
         }
         if (checkpoint && p->checkpoint && res->done % p->checkpoint == 0 && res->done < p->total &&
             (st = checkpoint(user)) != SLUICE_OK)
@@ -119,8 +100,6 @@ sluice_status sr_progressive_run(const sr_progressive *p, sr_step_fn step,
     res->seconds = sr_clock_seconds() - t0;
     if (p->progress)
         sr_progress_finish(out);
-    sr_image_destroy(half);
-    sr_image_destroy(all);
     return st;
 }
 
@@ -130,8 +109,8 @@ void sr_progressive_report_target(const char *prog, const sr_progressive *p,
     if (!(p->target_error > 0))
         return;
     if (res->error < 0)
-        fprintf(out, "%s: target relMSE %g: no estimate (it needs at least 2 %s)\n", prog,
-                p->target_error, p->unit ? p->unit : "steps");
+        fprintf(out, "%s: target relMSE %g: no estimate (too few %s)\n", prog, p->target_error,
+                p->unit ? p->unit : "steps");
     else
         fprintf(out, "%s: estimated relMSE %.3g after %u %s: target %g %s\n", prog, res->error,
                 res->done, p->unit ? p->unit : "steps", p->target_error,

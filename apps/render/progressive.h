@@ -20,8 +20,10 @@ typedef sluice_status (*sr_step_fn)(void *user);
 /** Writes the image so far (a checkpoint). */
 typedef sluice_status (*sr_checkpoint_fn)(void *user);
 
-/** Resolves the image so far (the mean of the steps done) into `img`. */
-typedef sluice_status (*sr_resolve_fn)(void *user, sr_image *img);
+/** After a step, with a target error: writes the render's latest estimate of
+ *  its relMSE (-1 while it has none) and returns non-zero once the target is
+ *  reached (e.g. rt_renderer_done and sr_adaptive_stats.error). */
+typedef int (*sr_estimate_fn)(void *user, double *error);
 
 /** How to run the loop. */
 typedef struct sr_progressive {
@@ -32,14 +34,12 @@ typedef struct sr_progressive {
     unsigned checkpoint; /**< call `checkpoint` every this many steps; 0: never */
     int progress;        /**< report progress on `out` */
     FILE *out;           /**< where progress goes (stderr when NULL) */
-    /** Stop once the image's rel_mse, estimated from the render itself,
-     *  is at most this (0: never). The estimate (sr_image_half_rel_mse)
-     *  compares the image after 2n steps with the one after n, so it is
-     *  taken at 2, 4, 8, ... steps and the render stops at a power of two.
-     *  It counts noise, not bias. Needs `resolve`, width and height. */
+    /** The target relMSE the render was given (0: none), for the report;
+     *  with one, `estimate` (required then) is asked after every step
+     *  whether it is reached (the render estimates its own error: see
+     *  adaptive.h). */
     double target_error;
-    sr_resolve_fn resolve;
-    unsigned width, height; /**< the image's size, for target_error */
+    sr_estimate_fn estimate;
 } sr_progressive;
 
 /** How the loop went. */

@@ -7,14 +7,18 @@
 
 /* One eye ray per pixel, in 8x8 tiles so that neighbouring rays (which take
  * nearly the same path through the grid) are neighbours in the stream. The
- * launch covers whole tiles; positions outside the image emit nothing.
- * Output 0 (ordered) receives the rays. The first sample goes through pixel
- * centres; with f.jitter set, rays are jittered inside their pixel. */
-__kernel void rt_raygen(SLUICE_PARAMS, global rt_ray *rays, const rt_frame f)
+ * launch covers whole tiles, those listed in `tiles` (the ones still taking
+ * samples, apps/render/adaptive.h); positions outside the image emit
+ * nothing. Output 0 (ordered) receives the rays, each adding to its pixel's
+ * slot in the film half of this sample (f.film_half). The first sample goes
+ * through pixel centres; with f.jitter set, rays are jittered inside their
+ * pixel. */
+__kernel void rt_raygen(SLUICE_PARAMS, global rt_ray *rays, const rt_frame f,
+                        global const uint *tiles)
 {
     SLUICE_FOR_EACH (i) {
         uint tiles_x = (f.width + 7u) / 8u;
-        uint tile = i / 64u, within = i % 64u;
+        uint tile = tiles[i / 64u], within = i % 64u;
         uint x = (tile % tiles_x) * 8u + within % 8u;
         uint y = (tile / tiles_x) * 8u + within / 8u;
         int inside = x < f.width && y < f.height;
@@ -42,7 +46,7 @@ __kernel void rt_raygen(SLUICE_PARAMS, global rt_ray *rays, const rt_frame f)
             r.tmin = 0.0f;
             r.tmax = INFINITY;
             r.wr = r.wg = r.wb = 1.0f;
-            r.pixel = pixel;
+            r.pixel = pixel + f.film_half;
             r.key = key;
             r.flags = RT_KIND_EYE | RT_FLAG_COUNT_EMIT;
             r.pad0 = r.pad1 = 0u;

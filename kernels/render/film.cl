@@ -10,8 +10,9 @@
 
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 
-/* Adds colour `c` to pixel `p`; non-finite values are dropped (the caller
- * counts them: returns 1), so no NaN or Inf ever reaches the image. */
+/* Adds colour `c` to slot `p` (a pixel in one of the film's two halves:
+ * rt_ray.pixel); non-finite values are dropped (the caller counts them:
+ * returns 1), so no NaN or Inf ever reaches the image. */
 inline int rt_add(global long *accum, uint p, float3 c)
 {
     if (!(isfinite(c.x) && isfinite(c.y) && isfinite(c.z)))

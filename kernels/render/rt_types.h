@@ -142,6 +142,8 @@ typedef struct rt_frame {
     float area_total;   /* their total area */
     float scene_eps;    /* offset for secondary ray origins, scaled to the scene */
     rt_u32 jitter;      /* non-zero: jitter the eye ray inside its pixel */
+    rt_u32 film_half;   /* film slot offset of this sample: (sample & 1) *
+                           pixels (the film's halves, apps/render/film.h) */
 } rt_frame;
 
 /**
