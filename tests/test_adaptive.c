@@ -4,9 +4,10 @@
  *
  *   estimator     a synthetic film (a quarter constant, a quarter and a half
  *                 with uniform noise of two known variances) sampled through
- *                 sr_adaptive: the
- *                 image's relMSE estimate against the known variance of the
- *                 mean, within 25% (3 standard deviations of the estimate);
+ *                 sr_adaptive: the image's relMSE estimate against the
+ *                 known variance of the mean, within 25% (3 standard
+ *                 deviations of the estimate, plus the few percent that the
+ *                 smaller half's mean in the denominator adds);
  *                 the resolved image against a plain C mean of the same
  *                 samples, within one fixed-point quantum
  *   stopping      the same film with a target: constant tiles stop at the

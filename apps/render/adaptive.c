@@ -162,8 +162,9 @@ static void estimate(sr_adaptive *a)
             for (unsigned x = tx * SR_FILM_TILE; x < a->width && x < (tx + 1) * SR_FILM_TILE; ++x) {
                 size_t i = 3 * ((size_t)y * a->width + x);
                 for (int k = 0; k < 3; ++k, ++values) {
-                    double d = (double)all[i + k] - odd[i + k];
-                    e += d * d / ((double)all[i + k] * all[i + k] + SR_IMAGE_REL_MSE_EPSILON);
+                    double b = odd[i + k], d = (double)all[i + k] - b;
+                    double even = 2.0 * all[i + k] - b, m = even < b ? even : b;
+                    e += d * d / (m * m + SR_IMAGE_REL_MSE_EPSILON);
                 }
             }
         e /= (double)values;

@@ -8,10 +8,16 @@
  * ones, I - B = (A - B) / 2 for A the even half's mean, and A and B are
  * independent with variance 2 s^2 / n each, so E[(I - B)^2] = s^2 / n, the
  * variance of I. A tile's relMSE estimate is therefore
- *     mean over its pixels and channels of (I - B)^2 / (I^2 + 0.01)
+ *     mean over its pixels and channels of (I - B)^2 / (min(A, B)^2 + 0.01)
  * (the 0.01 as in image_metrics.h's rel_mse), and the image's is the mean
- * over all pixels. It counts noise, not bias: a biased render (a photon map
- * of fixed size) is judged by how much more samples would still change it.
+ * over all pixels. The denominator stands for the true value, which the
+ * relMSE divides by: the noisy mean I itself would hide fireflies (a rare
+ * bright sample raises I as much as the difference, and the estimate of a
+ * caustic under glass came out 40 times too low), while the smaller half
+ * has it only when both halves do. It overestimates smooth noise slightly
+ * (the smaller of two means is a little low). It counts noise, not bias: a
+ * biased render (a photon map of fixed size) is judged by how much more
+ * samples would still change it.
  *
  * With a target, a tile whose estimate is at or below it stops taking
  * samples once it has min_samples (the rest of the image goes on), and the
