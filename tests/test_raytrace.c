@@ -747,6 +747,7 @@ static void test_cli(const char *exe)
         {"--min-spp 3", "--min-spp"},
         {"--min-spp 0", "--min-spp"},
         {"--target-error -1", "--target-error"},
+        {"--sample-map map.bmp", "--sample-map"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; ++i) {
         snprintf(cmd, sizeof cmd, "%s %s --out cli_bad.png", exe, bad[i].args);
@@ -782,7 +783,8 @@ static void test_cli(const char *exe)
     /* a target error: the statistics say what adaptive sampling skipped */
     snprintf(cmd, sizeof cmd,
              "%s --scene cornell --mode path --size 32x32 --light-samples 1 --target-error 0.02 "
-             "--exec fused --out cli_ok.exr --stats cli_ok.json --no-profile",
+             "--exec fused --out cli_ok.exr --stats cli_ok.json --no-profile --sample-map "
+             "cli_map.exr",
              exe);
     CHECK(check_run(cmd, out, sizeof out) == 0 && strstr(out, "sampling: target relMSE 0.02") &&
               strstr(out, "target 0.02 reached"),
@@ -795,6 +797,21 @@ static void test_cli(const char *exe)
     }
     CHECK(f && strstr(out, "\"sampling\": {\"target\": 0.02, \"adaptive\": true"),
           "--target-error stats JSON: %s", out);
+    /* the sample map: samples over the most any tile took, 1 somewhere */
+    CHECK(sr_image_read("cli_map.exr", &img, err, sizeof err) == SLUICE_OK, "%s", err);
+    if (img) {
+        const float *px = sr_image_pixels_const(img);
+        float most = 0, least = 1;
+        for (size_t i = 0; i < 32 * 32 * 3; ++i) {
+            most = px[i] > most ? px[i] : most;
+            least = px[i] < least ? px[i] : least;
+        }
+        CHECK(sr_image_width(img) == 32 && most == 1.0f && least > 0.0f,
+              "sample map: %ux%u, from %g to %g", sr_image_width(img), sr_image_height(img),
+              (double)least, (double)most);
+        sr_image_destroy(img);
+        img = NULL;
+    }
 
     /* Ctrl-C: finish the sample, write the image, exit 130 */
     remove("cli_int.exr");

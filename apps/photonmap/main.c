@@ -425,6 +425,11 @@ int main(int argc, char **argv)
     size_t bad = 0;
     if (write_image(&u, &bad) != SLUICE_OK)
         goto done;
+    if (cc->sample_map && rt_renderer_write_sample_map(pm_renderer_whitted(r), cc->sample_map, err,
+                                                       sizeof err) != SLUICE_OK) {
+        fprintf(stderr, PROG ": --sample-map %s: %s\n", cc->sample_map, err);
+        goto done;
+    }
     if (bad)
         fprintf(stderr, PROG ": warning: %zu non-finite pixels written as black\n", bad);
     if (!cc->quiet)

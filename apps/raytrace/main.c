@@ -268,6 +268,11 @@ int main(int argc, char **argv)
     size_t bad_pixels = 0;
     if (write_image(&r, &bad_pixels) != SLUICE_OK)
         goto done;
+    if (cc->sample_map &&
+        rt_renderer_write_sample_map(rend, cc->sample_map, err, sizeof err) != SLUICE_OK) {
+        fprintf(stderr, PROG ": --sample-map %s: %s\n", cc->sample_map, err);
+        goto done;
+    }
     if (bad_pixels)
         fprintf(stderr, PROG ": warning: %zu non-finite pixels written as black\n", bad_pixels);
 

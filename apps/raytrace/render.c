@@ -359,6 +359,23 @@ sluice_status rt_renderer_write(rt_renderer *r, const char *path, size_t *bad_pi
                          err_size);
 }
 
+sluice_status rt_renderer_write_sample_map(rt_renderer *r, const char *path, char *err,
+                                           size_t err_size)
+{
+    if (!r || !path) {
+        sr_set_error(err, err_size, "rt_renderer_write_sample_map: NULL argument");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    sr_image *img = NULL;
+    sluice_status st = sr_image_create(r->opt.width, r->opt.height, 3, &img, err, err_size);
+    if (st == SLUICE_OK)
+        st = sr_adaptive_sample_map(r->sampling, img);
+    if (st == SLUICE_OK)
+        st = sr_image_write(img, path, err, err_size);
+    sr_image_destroy(img);
+    return st;
+}
+
 const uint32_t *rt_renderer_tile_samples(const rt_renderer *r)
 {
     return r ? sr_adaptive_tile_samples(r->sampling) : NULL;

@@ -79,6 +79,11 @@ sluice_status rt_renderer_image(rt_renderer *r, sr_image *img, size_t *bad_pixel
 sluice_status rt_renderer_write(rt_renderer *r, const char *path, size_t *bad_pixels, char *err,
                                 size_t err_size);
 
+/** Writes where the samples went (sr_adaptive_sample_map) to `path` (.png,
+ *  .exr, .hdr); `err` says why it failed. */
+sluice_status rt_renderer_write_sample_map(rt_renderer *r, const char *path, char *err,
+                                           size_t err_size);
+
 /** Samples per tile so far (sr_film_resolve_tiles). */
 const uint32_t *rt_renderer_tile_samples(const rt_renderer *r);
 

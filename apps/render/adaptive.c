@@ -231,6 +231,24 @@ const sr_adaptive_stats *sr_adaptive_statistics(const sr_adaptive *a)
     return a ? &a->stats : NULL;
 }
 
+sluice_status sr_adaptive_sample_map(const sr_adaptive *a, sr_image *img)
+{
+    if (!a || !img || sr_image_width(img) != a->width || sr_image_height(img) != a->height ||
+        sr_image_channels(img) != 3)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    uint32_t most = 1;
+    for (size_t t = 0; t < (size_t)a->across * a->down; ++t)
+        most = a->samples[t] > most ? a->samples[t] : most;
+    float *px = sr_image_pixels(img);
+    for (unsigned y = 0; y < a->height; ++y)
+        for (unsigned x = 0; x < a->width; ++x) {
+            float v = (float)a->samples[(y / SR_FILM_TILE) * a->across + x / SR_FILM_TILE] / most;
+            float *p = px + 3 * ((size_t)y * a->width + x);
+            p[0] = p[1] = p[2] = v;
+        }
+    return SLUICE_OK;
+}
+
 /* The share of pixel samples skipped, in [0, 1]. */
 static double skipped_share(const sr_adaptive_stats *s)
 {

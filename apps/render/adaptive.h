@@ -30,6 +30,7 @@
 #define SR_ADAPTIVE_H
 
 #include "film.h"
+#include "image.h"
 #include "sluice/sluice.h"
 
 #include <stddef.h>
@@ -111,6 +112,11 @@ int sr_adaptive_done(const sr_adaptive *a);
 
 /** What it did so far. */
 const sr_adaptive_stats *sr_adaptive_statistics(const sr_adaptive *a);
+
+/** Fills `img` (RGB, the film's size) with each pixel's samples over the
+ *  most any tile took, in [0, 1] (grey): a picture of where the samples
+ *  went. SLUICE_ERROR_INVALID_ARGUMENT for an image of another size. */
+sluice_status sr_adaptive_sample_map(const sr_adaptive *a, sr_image *img);
 
 /** Prints a "sampling:" line (nothing without a target): the target, the
  *  tiles stopped and pixel samples skipped, the estimate and what it would

@@ -109,9 +109,9 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
         c->adaptive = 0;
         return 1;
     }
-    static const char *const valued[] = {
-        "--scene",      "--out",  "--stats",        "--device",  "--size", "--seed",
-        "--checkpoint", "--time", "--target-error", "--min-spp", NULL};
+    static const char *const valued[] = {"--scene",        "--out",     "--stats",      "--device",
+                                         "--size",         "--seed",    "--checkpoint", "--time",
+                                         "--target-error", "--min-spp", "--sample-map", NULL};
     int which = sr_cli_choice(a, valued);
     if (which < 0)
         return 0;
@@ -152,9 +152,12 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
         if (!sr_cli_double(v, 1e-12, 1.0, &c->target_error))
             return sr_cli_bad(prog, a, v, "expected a relMSE above 0 and at most 1");
         break;
-    default:
+    case 9:
         if (!sr_cli_uint(v, 2, 1u << 20, &c->min_samples) || c->min_samples % 2)
             return sr_cli_bad(prog, a, v, "expected an even number from 2 to 1048576");
+        break;
+    default:
+        c->sample_map = v;
         break;
     }
     return 1;
@@ -171,7 +174,10 @@ int sr_cli_image_path(const char *prog, const char *opt, const char *path)
 
 int sr_cli_common_finish(const char *prog, const sr_cli_common *c)
 {
-    return sr_cli_image_path(prog, "--out", c->out);
+    int rc = sr_cli_image_path(prog, "--out", c->out);
+    if (!rc && c->sample_map)
+        rc = sr_cli_image_path(prog, "--sample-map", c->sample_map);
+    return rc;
 }
 
 void sr_cli_common_usage(FILE *out)
@@ -195,6 +201,8 @@ void sr_cli_common_usage(FILE *out)
           "                           stop taking samples (adaptive sampling)\n"
           "  --no-adaptive            with --target-error, every pixel takes every sample\n"
           "  --min-spp N              samples before the first estimate (even, default 8)\n"
+          "  --sample-map FILE        also write where the samples went: each pixel's\n"
+          "                           samples over the most any tile took (grey, 0 to 1)\n"
           "  --device NAME            OpenCL device (substring of \"platform / device\")\n"
           "  --no-profile             do not time kernels\n"
           "  --quiet                  no statistics table\n"

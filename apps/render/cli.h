@@ -19,6 +19,7 @@ typedef struct sr_cli_common {
     const char *scene;      /**< --scene (default "cornell") */
     const char *out;        /**< --out (default "out.png"): .png, .exr or .hdr */
     const char *stats;      /**< --stats FILE (JSON), or NULL */
+    const char *sample_map; /**< --sample-map FILE (image), or NULL */
     const char *device;     /**< --device substring, or NULL */
     unsigned width, height; /**< --size; 0: the scene camera's */
     unsigned seed;          /**< --seed (default 1) */
