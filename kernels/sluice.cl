@@ -270,12 +270,15 @@ inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
  * On x86 CPUs with AVX-512 (PoCL compiles kernels with the host's features)
  * a block is written with the compress instruction: the selected lanes are
  * packed and stored as one 64-byte store, which is what brings conditional
- * output near the copy bandwidth (bench/README.md). Elsewhere, or when the
+ * output near the copy bandwidth (bench/README.md). With AVX2 but no
+ * AVX-512 (AMD before Zen 4, most Intel client CPUs), each half of 8 lanes
+ * is packed by one lane permutation (vpermd) whose indices come from a
+ * 256-entry table, and stored as one 32-byte store. Elsewhere, or when the
  * host asks for portable kernels (SLUICE_NO_SIMD), the same macros write the
  * lanes one by one: the same result, but slower than the per-record macros,
- * so fast kernels test SLUICE_EMIT16_FAST (below) before taking blocks. Both
- * paths are tested on the same inputs (tests/meson.build: runtime_portable,
- * compact_portable). */
+ * so fast kernels test SLUICE_EMIT16_FAST (below) before taking blocks. All
+ * three paths are tested on the same inputs (tests/meson.build:
+ * runtime_portable, compact_portable, runtime_avx2, compact_avx2). */
 #if !defined(SLUICE_NO_SIMD) && defined(__AVX512F__) && defined(__clang__) && defined(__has_builtin)
 #if __has_builtin(__builtin_ia32_compresssi512_mask) &&                                            \
     __has_builtin(__builtin_ia32_compressstoresi512_mask) &&                                       \
@@ -284,14 +287,82 @@ inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
 #endif
 #endif
 
-/* 1 when SLUICE_EMIT16 compiles to compress instructions, else 0. The
- * lane-by-lane fallback is correct but slower than the per-record macros, so
- * a kernel can take 16-record blocks only when this is 1:
+#if !defined(SLUICE_NO_SIMD) && !defined(SLUICE_AVX512_) && defined(__AVX2__) &&                  \
+    defined(__clang__) && defined(__has_builtin)
+#if __has_builtin(__builtin_ia32_permvarsi256) && __has_builtin(__builtin_ia32_movmskps256)
+#define SLUICE_AVX2_ 1
+#endif
+#endif
+
+/* 1 when SLUICE_EMIT16 compiles to compress or permute instructions, else 0.
+ * The lane-by-lane fallback is correct but slower than the per-record
+ * macros, so a kernel can take 16-record blocks only when this is 1:
  *     for (; SLUICE_EMIT16_FAST && i + 16u <= e; i += 16u) ...  */
-#ifdef SLUICE_AVX512_
+#if defined(SLUICE_AVX512_) || defined(SLUICE_AVX2_)
 #define SLUICE_EMIT16_FAST 1
 #else
 #define SLUICE_EMIT16_FAST 0
+#endif
+
+#ifdef SLUICE_AVX2_
+/* Entry m: the positions of the set bits of the 8-bit mask m, in increasing
+ * order, one per nibble from the lowest (nibble k holds the k-th set bit's
+ * position; the nibbles past popcount(m) are 0). A vpermd with these indices
+ * packs the selected lanes of 8 to the front. */
+constant uint sluice_pack8_[256] = {
+    0x00000000u, 0x00000000u, 0x00000001u, 0x00000010u, 0x00000002u, 0x00000020u,
+    0x00000021u, 0x00000210u, 0x00000003u, 0x00000030u, 0x00000031u, 0x00000310u,
+    0x00000032u, 0x00000320u, 0x00000321u, 0x00003210u, 0x00000004u, 0x00000040u,
+    0x00000041u, 0x00000410u, 0x00000042u, 0x00000420u, 0x00000421u, 0x00004210u,
+    0x00000043u, 0x00000430u, 0x00000431u, 0x00004310u, 0x00000432u, 0x00004320u,
+    0x00004321u, 0x00043210u, 0x00000005u, 0x00000050u, 0x00000051u, 0x00000510u,
+    0x00000052u, 0x00000520u, 0x00000521u, 0x00005210u, 0x00000053u, 0x00000530u,
+    0x00000531u, 0x00005310u, 0x00000532u, 0x00005320u, 0x00005321u, 0x00053210u,
+    0x00000054u, 0x00000540u, 0x00000541u, 0x00005410u, 0x00000542u, 0x00005420u,
+    0x00005421u, 0x00054210u, 0x00000543u, 0x00005430u, 0x00005431u, 0x00054310u,
+    0x00005432u, 0x00054320u, 0x00054321u, 0x00543210u, 0x00000006u, 0x00000060u,
+    0x00000061u, 0x00000610u, 0x00000062u, 0x00000620u, 0x00000621u, 0x00006210u,
+    0x00000063u, 0x00000630u, 0x00000631u, 0x00006310u, 0x00000632u, 0x00006320u,
+    0x00006321u, 0x00063210u, 0x00000064u, 0x00000640u, 0x00000641u, 0x00006410u,
+    0x00000642u, 0x00006420u, 0x00006421u, 0x00064210u, 0x00000643u, 0x00006430u,
+    0x00006431u, 0x00064310u, 0x00006432u, 0x00064320u, 0x00064321u, 0x00643210u,
+    0x00000065u, 0x00000650u, 0x00000651u, 0x00006510u, 0x00000652u, 0x00006520u,
+    0x00006521u, 0x00065210u, 0x00000653u, 0x00006530u, 0x00006531u, 0x00065310u,
+    0x00006532u, 0x00065320u, 0x00065321u, 0x00653210u, 0x00000654u, 0x00006540u,
+    0x00006541u, 0x00065410u, 0x00006542u, 0x00065420u, 0x00065421u, 0x00654210u,
+    0x00006543u, 0x00065430u, 0x00065431u, 0x00654310u, 0x00065432u, 0x00654320u,
+    0x00654321u, 0x06543210u, 0x00000007u, 0x00000070u, 0x00000071u, 0x00000710u,
+    0x00000072u, 0x00000720u, 0x00000721u, 0x00007210u, 0x00000073u, 0x00000730u,
+    0x00000731u, 0x00007310u, 0x00000732u, 0x00007320u, 0x00007321u, 0x00073210u,
+    0x00000074u, 0x00000740u, 0x00000741u, 0x00007410u, 0x00000742u, 0x00007420u,
+    0x00007421u, 0x00074210u, 0x00000743u, 0x00007430u, 0x00007431u, 0x00074310u,
+    0x00007432u, 0x00074320u, 0x00074321u, 0x00743210u, 0x00000075u, 0x00000750u,
+    0x00000751u, 0x00007510u, 0x00000752u, 0x00007520u, 0x00007521u, 0x00075210u,
+    0x00000753u, 0x00007530u, 0x00007531u, 0x00075310u, 0x00007532u, 0x00075320u,
+    0x00075321u, 0x00753210u, 0x00000754u, 0x00007540u, 0x00007541u, 0x00075410u,
+    0x00007542u, 0x00075420u, 0x00075421u, 0x00754210u, 0x00007543u, 0x00075430u,
+    0x00075431u, 0x00754310u, 0x00075432u, 0x00754320u, 0x00754321u, 0x07543210u,
+    0x00000076u, 0x00000760u, 0x00000761u, 0x00007610u, 0x00000762u, 0x00007620u,
+    0x00007621u, 0x00076210u, 0x00000763u, 0x00007630u, 0x00007631u, 0x00076310u,
+    0x00007632u, 0x00076320u, 0x00076321u, 0x00763210u, 0x00000764u, 0x00007640u,
+    0x00007641u, 0x00076410u, 0x00007642u, 0x00076420u, 0x00076421u, 0x00764210u,
+    0x00007643u, 0x00076430u, 0x00076431u, 0x00764310u, 0x00076432u, 0x00764320u,
+    0x00764321u, 0x07643210u, 0x00000765u, 0x00007650u, 0x00007651u, 0x00076510u,
+    0x00007652u, 0x00076520u, 0x00076521u, 0x00765210u, 0x00007653u, 0x00076530u,
+    0x00076531u, 0x00765310u, 0x00076532u, 0x00765320u, 0x00765321u, 0x07653210u,
+    0x00007654u, 0x00076540u, 0x00076541u, 0x00765410u, 0x00076542u, 0x00765420u,
+    0x00765421u, 0x07654210u, 0x00076543u, 0x00765430u, 0x00765431u, 0x07654310u,
+    0x00765432u, 0x07654320u, 0x07654321u, 0x76543210u,
+};
+
+typedef uint8 sluice_uint8_unaligned_ __attribute__((aligned(4)));
+
+/* Packs the lanes of `x` selected by the 8-bit mask `m` to the front. */
+inline uint8 sluice_pack8_lanes_(uint8 x, uint m)
+{
+    uint8 idx = ((uint8)sluice_pack8_[m] >> (uint8)(0u, 4u, 8u, 12u, 16u, 20u, 24u, 28u)) & 7u;
+    return as_uint8(__builtin_ia32_permvarsi256(as_int8(x), as_int8(idx)));
+}
 #endif
 
 /* No 16-wide vector crosses a call here, so the helpers below build without
@@ -315,8 +386,13 @@ typedef uint16 sluice_uint16_unaligned_ __attribute__((aligned(4)));
 
 inline ushort sluice_mask16_(const int16 *c)
 {
-#ifdef SLUICE_AVX512_
+#if defined(SLUICE_AVX512_)
     return __builtin_ia32_cmpd512_mask(*c, (int16)0, 4 /* not equal */, (ushort)0xffff);
+#elif defined(SLUICE_AVX2_)
+    /* A non-zero lane becomes -1 (sign bit set); vmovmskps gathers 8 signs. */
+    int16 nz = *c != (int16)0;
+    return (ushort)(__builtin_ia32_movmskps256(as_float8(nz.lo)) |
+                    (__builtin_ia32_movmskps256(as_float8(nz.hi)) << 8));
 #else
     /* Lane k keeps bit k where it is non-zero; OR the halves together. */
     int16 b = (*c != (int16)0) & (int16)(0x1, 0x2, 0x4, 0x8, 0x10, 0x20, 0x40, 0x80, 0x100, 0x200,
@@ -351,6 +427,17 @@ inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const 
     }
     if (p + k <= lim) {
         __builtin_ia32_compressstoresi512_mask((int16 *)(size_t)(buf + p), as_int16(*x), m);
+        return;
+    }
+#elif defined(SLUICE_AVX2_)
+    /* Two full 8-lane stores, the second where the first's records end;
+     * safe while both stay inside this chunk's reserved room (as above). */
+    if (p + 16u <= lim) {
+        uint m0 = m & 0xffu;
+        global sluice_uint8_unaligned_ *q = (global sluice_uint8_unaligned_ *)(buf + p);
+        *q = sluice_pack8_lanes_(x->lo, m0);
+        q = (global sluice_uint8_unaligned_ *)(buf + p + popcount(m0));
+        *q = sluice_pack8_lanes_(x->hi, (uint)m >> 8);
         return;
     }
 #endif
