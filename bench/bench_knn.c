@@ -23,6 +23,7 @@
  * times the mean k-photon radius; default 1), to measure the grid choice.
  */
 #include "bench_args.h"
+#include "bench_machine.h"
 #include "knn.h"
 
 #include <flann/flann.h>
@@ -100,27 +101,6 @@ static void surface_point(const quad *q, const double *cdf, size_t nq, uint32_t 
     float a = frand(s), b = frand(s);
     for (int k = 0; k < 3; ++k)
         p[k] = q[i].o[k] + a * q[i].u[k] + b * q[i].v[k];
-}
-
-static void cpu_name(char *out, size_t size)
-{
-    snprintf(out, size, "unknown");
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    if (!f)
-        return;
-    char line[512];
-    while (fgets(line, sizeof line, f)) {
-        if (strncmp(line, "model name", 10) == 0) {
-            char *c = strchr(line, ':');
-            if (c) {
-                c += 1 + (c[1] == ' ');
-                c[strcspn(c, "\n")] = '\0';
-                snprintf(out, size, "%s", c);
-            }
-            break;
-        }
-    }
-    fclose(f);
 }
 
 typedef struct result {
@@ -326,8 +306,7 @@ int main(int argc, char **argv)
         qs[i].id = i;
     }
 
-    char err[512], cpu[256];
-    cpu_name(cpu, sizeof cpu);
+    char err[512];
     sluice_context *ctx = NULL;
     if (sluice_context_create(NULL, &ctx, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, "bench_knn: %s\n", err);
@@ -335,6 +314,9 @@ int main(int argc, char **argv)
     }
     sluice_device_info dev;
     sluice_context_device(ctx, &dev);
+    bench_machine mach;
+    bench_machine_probe(ctx, &mach);
+    const char *cpu = mach.cpu;
     sr_point_grid *grid = NULL;
     pm_knn *knn = NULL;
     sluice_stream *sp = NULL, *sq = NULL, *sr = NULL;
@@ -349,7 +331,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "bench_knn: setup: %s\n", sluice_context_error(ctx));
     result res[MAX_K];
     size_t mismatches = 0;
-    printf("bench_knn: %u photons, %u queries, CPU %s, device %s\n", np, nq, cpu, dev.name);
+    printf("bench_knn: %u photons, %u queries, CPU %s (%s, kernels: %s), device %s\n", np, nq, cpu,
+           mach.isa, mach.block, dev.name);
     printf("%5s %8s %12s %10s %10s %10s %12s %12s %8s %8s\n", "k", "grid", "build ms", "atleast ms",
            "exact ms", "mean n", "FLANN b ms", "FLANN q ms", "atleast", "exact");
     for (unsigned i = 0; ok && i < nk; ++i) {
@@ -376,10 +359,11 @@ int main(int argc, char **argv)
             ok = 0;
         } else {
             fprintf(f,
-                    "{\n  \"cpu\": \"%s\",\n  \"device\": \"%s\",\n  \"photons\": %u,\n  "
+                    "{\n  \"cpu\": \"%s\",\n  \"cpu_isa\": \"%s\",\n  \"kernel_block_path\": "
+                    "\"%s\",\n  \"device\": \"%s\",\n  \"photons\": %u,\n  "
                     "\"queries\": %u,\n  \"reps\": %u,\n  \"flann\": \"KDTREE_SINGLE, eps 0, "
                     "leaf 10, cores 2, no radius limit\",\n  \"results\": [\n",
-                    cpu, dev.name, np, nq, reps);
+                    cpu, mach.isa, mach.block, dev.name, np, nq, reps);
             for (unsigned i = 0; i < nk; ++i) {
                 result *r = &res[i];
                 double flann = r->flann_build_s + r->flann_query_s;

@@ -35,6 +35,7 @@
  */
 #include "clock.h"
 #include "bench_args.h"
+#include "bench_machine.h"
 #include "grid.h"
 #include "mt_ref.h"
 #include "render.h"
@@ -825,7 +826,10 @@ int main(int argc, char **argv)
     }
     sluice_device_info info;
     TRY(sluice_context_device(ctx, &info));
-    printf("device: %s / %s, %u compute units\n", info.platform, info.name, info.compute_units);
+    bench_machine mach;
+    bench_machine_probe(ctx, &mach);
+    printf("device: %s / %s, %u compute units\nCPU: %s (%s), kernels' block emission: %s\n",
+           info.platform, info.name, info.compute_units, mach.cpu, mach.isa, mach.block);
 #ifdef HAVE_EMBREE
     printf("Embree %s, BVH build quality high, 1 and 2 threads\n", RTC_VERSION_STRING);
 #else
@@ -932,6 +936,8 @@ int main(int argc, char **argv)
             return 2;
         }
         fprintf(f, "{\n  \"benchmark\": \"bench_raytrace\",\n");
+        fprintf(f, "  \"cpu\": \"%s\",\n  \"cpu_isa\": \"%s\",\n  \"kernel_block_path\": \"%s\",\n",
+                mach.cpu, mach.isa, mach.block);
         fprintf(f,
                 "  \"device\": {\"platform\": \"%s\", \"name\": \"%s\", \"compute_units\": %u, "
                 "\"opencl_c\": \"%s\"},\n",

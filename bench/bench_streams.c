@@ -11,6 +11,7 @@
  * (e.g. a split reads n records and writes n), not the traffic the
  * implementation actually causes.
  */
+#include "bench_machine.h"
 #include "sluice/sluice.h"
 #include "sluice/streams.h"
 
@@ -361,7 +362,11 @@ int main(int argc, char **argv)
     }
     sluice_device_info info;
     sluice_context_device(ctx, &info);
-    fprintf(stderr, "device: %s, n = %zu, best of %d runs\n", info.name, n, reps);
+    bench_machine mach;
+    bench_machine_probe(ctx, &mach);
+    fprintf(stderr,
+            "device: %s, n = %zu, best of %d runs\nCPU: %s (%s), kernels' block emission: %s\n",
+            info.name, n, reps, mach.cpu, mach.isa, mach.block);
 
     bench b = {0};
     b.n = n;
@@ -519,8 +524,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "bench_streams: cannot write %s\n", out_path);
         return 1;
     }
-    fprintf(f, "{\n  \"device\": \"%s\",\n  \"records\": %zu,\n  \"runs\": %d,\n", info.name, n,
-            reps);
+    fprintf(f,
+            "{\n  \"device\": \"%s\",\n  \"cpu\": \"%s\",\n  \"cpu_isa\": \"%s\",\n  "
+            "\"kernel_block_path\": \"%s\",\n  \"records\": %zu,\n  \"runs\": %d,\n",
+            info.name, mach.cpu, mach.isa, mach.block, n, reps);
     fprintf(f, "  \"copy_gb_per_s\": %.3f,\n  \"primitives\": [\n", copy_gbs);
     printf("%-22s %12s %10s %9s %10s %12s\n", "primitive", "Mrecords/s", "GB/s", "of copy", "vs C",
            "scratch %");
