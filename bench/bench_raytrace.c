@@ -423,13 +423,15 @@ static double agree_t(const peer_hits *a, const peer_hits *b, size_t n)
 }
 #endif
 
+/* "bunny-close": the bunny filling most of the frame (bench/scenes). */
 static sr_scene *load_scene(const char *name)
 {
     char err[512];
     sr_scene_load_options o = {0};
     o.flags = SR_SCENE_ALLOW_NO_LIGHT;
     sr_scene *sc = NULL;
-    if (sr_scene_load(name, &o, &sc, err, sizeof err) != SLUICE_OK) {
+    const char *path = strcmp(name, "bunny-close") == 0 ? BENCH_SCENES_DIR "/bunny-close.json" : name;
+    if (sr_scene_load(path, &o, &sc, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, PROG ": %s\n", err);
         return NULL;
     }
@@ -760,7 +762,8 @@ static void usage(FILE *f)
                "  --size N          image side for the rays/s comparison (default 512)\n"
                "  --reps R          timed rounds, each running every peer for 3 frames;\n"
                "                    the best frame of each peer is kept (default 10)\n"
-               "  --scene NAME      scene (default cornell and bunny); repeatable\n"
+               "  --scene NAME      scene (default cornell, bunny and bunny-close: the bunny\n"
+               "                    filling most of the frame); repeatable\n"
                "  --out FILE        write the results as JSON\n"
                "  --purcell-size N  image side for Purcell's statistics (default 1024)\n"
                "  --skip-purcell    no Purcell statistics\n"
@@ -813,9 +816,10 @@ int main(int argc, char **argv)
         fclose(probe);
     if (nscenes == 0) {
         scenes[nscenes++] = "cornell";
-        if (have_bunny)
+        if (have_bunny) {
             scenes[nscenes++] = "bunny";
-        else
+            scenes[nscenes++] = "bunny-close";
+        } else
             fprintf(stderr, PROG ": no " BUNNY_PATH " (glmark2-data): bunny skipped\n");
     }
 
