@@ -8,8 +8,9 @@
  * one per lane of 16-wide vectors. Every lane runs exactly the operations of
  * the scalar functions of rt_trace.cl (same order, no contraction), so a
  * ray's voxels, tests and hit do not depend on which mode or path ran it.
- * Loads of per-lane addresses are AVX-512 gathers where the compiler offers
- * them (PoCL builds for the host CPU), plain loads otherwise.
+ * Loads of per-lane addresses are AVX-512 gathers, or two 8-lane AVX2
+ * gathers, where the compiler offers them (PoCL builds for the host CPU),
+ * plain loads otherwise.
  */
 
 #if defined(SLUICE_AVX512_) && __has_builtin(__builtin_ia32_gathersiv16sf) &&                      \
@@ -21,12 +22,22 @@
 #define RT_PERMUTE512_ 1
 #endif
 
+#if defined(SLUICE_AVX2_) && __has_builtin(__builtin_ia32_gatherd_ps256) &&                        \
+    __has_builtin(__builtin_ia32_gatherd_d256) && __has_builtin(__builtin_ia32_permvarsf256)
+#define RT_AVX2_ 1
+#endif
+
 /* p[idx] in the lanes where m is set (0 elsewhere; nothing is read there). */
 inline float16 rt_gather_f(global const float *p, int16 idx, int16 m)
 {
 #ifdef RT_GATHER512_
     return __builtin_ia32_gathersiv16sf((float16)0.0f, (const void *)(size_t)p, idx,
                                         sluice_mask16(m), 4);
+#elif defined(RT_AVX2_)
+    const float *q = (const float *)(size_t)p;
+    float8 lo = __builtin_ia32_gatherd_ps256((float8)0.0f, q, idx.lo, as_float8(m.lo), 4);
+    float8 hi = __builtin_ia32_gatherd_ps256((float8)0.0f, q, idx.hi, as_float8(m.hi), 4);
+    return (float16)(lo, hi);
 #else
     int ix[16], mk[16];
     float r[16];
@@ -43,6 +54,11 @@ inline int16 rt_gather_i(global const uint *p, int16 idx, int16 m)
 #ifdef RT_GATHER512_
     return __builtin_ia32_gathersiv16si((int16)0, (const void *)(size_t)p, idx, sluice_mask16(m),
                                         4);
+#elif defined(RT_AVX2_)
+    const int *q = (const int *)(size_t)p;
+    int8 lo = __builtin_ia32_gatherd_d256((int8)0, q, idx.lo, m.lo, 4);
+    int8 hi = __builtin_ia32_gatherd_d256((int8)0, q, idx.hi, m.hi, 4);
+    return (int16)(lo, hi);
 #else
     int ix[16], mk[16], r[16];
     vstore16(idx, 0, ix);
@@ -75,8 +91,11 @@ inline int rt_first_lane(int16 x, ushort am)
 /* Lane l of x in every lane. */
 inline float16 rt_lane_bcast(float16 x, int l)
 {
-#ifdef RT_PERMUTE512_
+#if defined(RT_PERMUTE512_)
     return __builtin_ia32_permvarsf512(x, (int16)l);
+#elif defined(RT_AVX2_)
+    float8 r = __builtin_ia32_permvarsf256(l < 8 ? x.lo : x.hi, (int8)(l & 7));
+    return (float16)(r, r);
 #else
     float a[16];
     vstore16(x, 0, a);
@@ -85,10 +104,11 @@ inline float16 rt_lane_bcast(float16 x, int l)
 }
 
 /* Whether any lane of a mask (lanes 0 or -1) is set: one mask test on
- * AVX-512 (the generic any() tests sign bits lane by lane there). */
+ * AVX-512 or two sign-bit gathers on AVX2 (the generic any() tests sign
+ * bits lane by lane there). */
 inline int rt_any16(int16 m)
 {
-#ifdef SLUICE_AVX512_
+#if defined(SLUICE_AVX512_) || defined(SLUICE_AVX2_)
     return sluice_mask16(m) != 0;
 #else
     return any(m);
