@@ -1,8 +1,18 @@
 /*
- * bench_raytrace: primary rays per second of the ray tracer against its
- * peers, measured in one run on the same rays (one per pixel, through the
- * pixel centre, from the scene's own camera), the same mesh and the same
- * pixel count:
+ * bench_raytrace: rays per second of the ray tracer against its peers,
+ * measured in one run on the same rays, the same mesh and the same pixel
+ * count, for two ray sets per scene:
+ *   primary rays: one per pixel, through the pixel centre, from the scene's
+ *     own camera (coherent);
+ *   diffuse bounce rays: the incoherent rays a path tracer traces next, one
+ *     per pixel whose primary ray hit (by the C tracer below, the
+ *     reference): from the hit point offset along the geometric normal
+ *     (facing the incoming ray) by the renderer's scene_eps
+ *     (sr_scene_epsilon), in a cosine-weighted direction about that normal
+ *     drawn from a hash of the pixel (fixed seed), tmin 0, tmax infinity,
+ *     flagged as the renderer's path rays; in the primary rays' order (8x8
+ *     tiles), compacted to the pixels that have one.
+ * The peers:
  *   (a) Sluice, fused mode (one kernel takes a ray through the whole grid);
  *   (b) Sluice, stream mode (Purcell's multipass traverse / intersect);
  *   (c) a plain single-thread C tracer written here: the same uniform grid
@@ -13,15 +23,19 @@
  *       with 1 and 2 threads (a pthread split of the tile rows: Embree does
  *       not spawn threads for traversal); the fastest of the four is
  *       "Embree's best" (normally 2 threads, but a busy machine can make
- *       the second core worth nothing).
+ *       the second core worth nothing). The context is COHERENT for primary
+ *       rays and INCOHERENT for bounce rays; pixels without a bounce ray are
+ *       inactive lanes of rtcIntersect16 (valid 0; a tile with none active
+ *       is skipped) and are skipped by rtcIntersect1.
  * Sluice times are trace time only: rays already in a device stream, hits
  * left in one, after a warm-up; grid build and program compilation are
  * reported apart. The peers run in interleaved rounds (each round times
  * every peer for a few frames back to back, round 0 a warm-up) and every
  * time is the best frame of --reps rounds, so the ratios are taken under
- * the same conditions. Hit agreement
- * (the fraction of pixels where two peers name the same triangle, or both
- * miss) keeps the comparison honest.
+ * the same conditions; one function (time_peers) does this for either ray
+ * set. Rates count the rays of the set (for bounce rays: the pixels that
+ * have one). Hit agreement (the fraction of a set's rays for which two peers
+ * name the same triangle, or both miss) keeps the comparison honest.
  *
  * Then Purcell's statistics (thesis Fig. 5.2, Table 5.2) for ray casting at
  * 1024x1024 in stream mode, with grid minimum dimension 64 (his setting for
@@ -31,11 +45,13 @@
  *                  [--purcell-size N] [--skip-purcell] [--quick]
  *
  * Exit status 1 when a Sluice mode or the C tracer disagrees with another on
- * more than 1% of the pixels (a broken tracer), 2 on setup errors.
+ * more than 1% of the rays of either set (a broken tracer), 2 on setup
+ * errors.
  */
 #include "clock.h"
 #include "bench_args.h"
 #include "bench_machine.h"
+#include "device_scene.h"
 #include "grid.h"
 #include "mt_ref.h"
 #include "render.h"
@@ -117,6 +133,37 @@ static rt_ray *eye_rays(const sr_scene *sc, unsigned w, unsigned h)
                     r->flags = RT_KIND_EYE;
                 }
     return rays;
+}
+
+/* A set of rays that every peer traces: in stream order (the primary
+ * rays' 8x8 tiles), compacted to the pixels that have one, and by pixel for
+ * Embree's 4x4 tiles. */
+typedef struct ray_set {
+    rt_ray *rays; /* stream order */
+    size_t n;
+    rt_ray *by_pixel;      /* w * h rays; a harmless ray where not active */
+    unsigned char *active; /* by pixel: the pixel has a ray; NULL: every pixel */
+    int coherent;          /* Embree's context flag: COHERENT, else INCOHERENT */
+} ray_set;
+
+static ray_set primary_set(const sr_scene *sc, unsigned w, unsigned h)
+{
+    ray_set s = {0};
+    s.n = (size_t)w * h;
+    s.rays = eye_rays(sc, w, h);
+    s.by_pixel = xmalloc(s.n * sizeof *s.by_pixel);
+    for (size_t i = 0; i < s.n; ++i)
+        s.by_pixel[s.rays[i].pixel] = s.rays[i];
+    s.coherent = 1;
+    return s;
+}
+
+static void ray_set_free(ray_set *s)
+{
+    free(s->rays);
+    free(s->by_pixel);
+    free(s->active);
+    memset(s, 0, sizeof *s);
 }
 
 /* ------------------------------------------------------------------ */
@@ -240,13 +287,124 @@ static void cgrid_init(cgrid *g, const rt_grid_host *h, const sr_scene *sc)
 }
 
 /* ------------------------------------------------------------------ */
+/* Diffuse bounce rays                                                 */
+/* ------------------------------------------------------------------ */
+
+/* The renderer's counter-based random numbers (kernels/render/rng.cl:
+ * rt_hash, rt_key, rt_rand), on the host. */
+static uint32_t h_hash(uint32_t x)
+{
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+static uint32_t h_key(uint32_t a, uint32_t b)
+{
+    return h_hash(a ^ h_hash(b + 0x9e3779b9u));
+}
+
+static float h_rand(uint32_t key, uint32_t dim)
+{
+    return (float)(h_key(key, dim) >> 8) * (1.0f / 16777216.0f);
+}
+
+/* A cosine-weighted direction about the unit normal `n` from two uniform
+ * numbers, as kernels/render/surface.cl's rt_cosine_dir (Duff et al.'s
+ * tangent frame). */
+static void cosine_dir(const float n[3], float r1, float r2, float out[3])
+{
+    float phi = 2.0f * 3.14159265358979323846f * r1, st = sqrtf(r2),
+          ct = sqrtf(fmaxf(0.0f, 1.0f - r2));
+    float sign = n[2] >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n[2]), b = n[0] * n[1] * a;
+    float t1[3] = {1.0f + sign * n[0] * n[0] * a, sign * b, -sign * n[0]};
+    float t2[3] = {b, sign + n[1] * n[1] * a, -n[1]};
+    float cp = cosf(phi) * st, sp = sinf(phi) * st, len = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        out[k] = t1[k] * cp + t2[k] * sp + n[k] * ct;
+        len += out[k] * out[k];
+    }
+    len = sqrtf(len);
+    for (int k = 0; k < 3; ++k)
+        out[k] /= len;
+}
+
+/* The seed of the bounce directions (each pixel's are a hash of it and the
+ * pixel). */
+#define BOUNCE_SEED 0x5eedb0u
+
+/* The diffuse bounce rays of the primary rays `prim` from their hits `hits`
+ * (the C tracer's, in stream order): one per ray that hit, in the same
+ * order, as the renderer's path mode spawns them (kernels/raytrace/
+ * rt_shade.cl, rt_spawn): from the hit point offset along the geometric
+ * normal facing the incoming ray by `eps` (sr_scene_epsilon), a
+ * cosine-weighted direction about that normal, tmin 0, tmax infinity, kind
+ * RT_KIND_PATH at depth 1. `tv`: 9 floats (the vertices) per triangle. */
+static ray_set bounce_set(const ray_set *prim, const rt_hit *hits, const float *tv, float eps,
+                          unsigned w, unsigned h)
+{
+    ray_set s = {0};
+    size_t npix = (size_t)w * h;
+    s.rays = xmalloc(prim->n * sizeof *s.rays);
+    s.by_pixel = xmalloc(npix * sizeof *s.by_pixel);
+    memcpy(s.by_pixel, prim->by_pixel, npix * sizeof *s.by_pixel);
+    s.active = xmalloc(npix);
+    memset(s.active, 0, npix);
+    s.coherent = 0;
+    for (size_t i = 0; i < prim->n; ++i) {
+        const rt_ray *r = &prim->rays[i];
+        if (hits[i].tri == RT_NO_HIT)
+            continue;
+        const float *v = tv + 9 * (size_t)hits[i].tri;
+        float o[3] = {r->ox, r->oy, r->oz}, d[3] = {r->dx, r->dy, r->dz};
+        float e1[3], e2[3], p[3], ng[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = v[3 + k] - v[k];
+            e2[k] = v[6 + k] - v[k];
+            p[k] = o[k] + d[k] * hits[i].t;
+        }
+        ng[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        ng[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        ng[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        float len = sqrtf(ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2]);
+        float side = ng[0] * d[0] + ng[1] * d[1] + ng[2] * d[2] < 0.0f ? 1.0f : -1.0f;
+        for (int k = 0; k < 3; ++k)
+            ng[k] = len > 0.0f ? side * ng[k] / len : -d[k]; /* facing the incoming ray */
+        uint32_t key = h_key(BOUNCE_SEED, r->pixel);
+        float dir[3];
+        cosine_dir(ng, h_rand(key, 0u), h_rand(key, 1u), dir);
+        rt_ray *b = &s.rays[s.n++];
+        memset(b, 0, sizeof *b);
+        b->ox = p[0] + ng[0] * eps;
+        b->oy = p[1] + ng[1] * eps;
+        b->oz = p[2] + ng[2] * eps;
+        b->dx = dir[0];
+        b->dy = dir[1];
+        b->dz = dir[2];
+        b->tmin = 0.0f;
+        b->tmax = INFINITY;
+        b->wr = b->wg = b->wb = 1.0f;
+        b->pixel = r->pixel;
+        b->key = key;
+        b->flags = RT_KIND_PATH | (1u << RT_DEPTH_SHIFT);
+        s.by_pixel[r->pixel] = *b;
+        s.active[r->pixel] = 1;
+    }
+    return s;
+}
+
+/* ------------------------------------------------------------------ */
 /* Embree 3                                                            */
 /* ------------------------------------------------------------------ */
 
 #ifdef HAVE_EMBREE
 typedef struct emb_job {
     RTCScene scene;
-    const rt_ray *rays; /* by pixel */
+    const ray_set *set;
     unsigned w, h;
     uint32_t *tri; /* by pixel */
     float *t;
@@ -257,23 +415,31 @@ typedef struct emb_job {
 static void *emb_worker(void *arg)
 {
     emb_job *j = arg;
+    const rt_ray *rays = j->set->by_pixel;
+    const unsigned char *active = j->set->active;
     /* Embree's recommended floating-point mode for its threads */
     _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
     _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
     struct RTCIntersectContext ic;
     rtcInitIntersectContext(&ic);
-    ic.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    ic.flags = j->set->coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+                                : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
     unsigned tiles_x = (j->w + 3) / 4, tiles_y = (j->h + 3) / 4;
     for (unsigned ty = j->thread; ty < tiles_y; ty += j->threads)
         for (unsigned tx = 0; tx < tiles_x; ++tx) {
             if (j->packet == 16) {
                 struct RTCRayHit16 rh;
                 _Alignas(64) int valid[16];
+                int any = 0;
                 for (unsigned k = 0; k < 16; ++k) {
                     unsigned x = tx * 4 + k % 4, y = ty * 4 + k / 4;
                     int in = x < j->w && y < j->h;
-                    valid[k] = in ? -1 : 0;
-                    const rt_ray *r = &j->rays[in ? (size_t)y * j->w + x : 0];
+                    size_t p = in ? (size_t)y * j->w + x : 0;
+                    /* a pixel without a ray of this set: an inactive lane
+                     * (its record holds a harmless ray) */
+                    valid[k] = in && (!active || active[p]) ? -1 : 0;
+                    any |= valid[k];
+                    const rt_ray *r = &rays[p];
                     rh.ray.org_x[k] = r->ox;
                     rh.ray.org_y[k] = r->oy;
                     rh.ray.org_z[k] = r->oz;
@@ -289,10 +455,12 @@ static void *emb_worker(void *arg)
                     rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
                     rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
                 }
+                if (!any)
+                    continue;
                 rtcIntersect16(valid, j->scene, &ic, &rh);
                 for (unsigned k = 0; k < 16; ++k) {
                     unsigned x = tx * 4 + k % 4, y = ty * 4 + k / 4;
-                    if (x < j->w && y < j->h) {
+                    if (valid[k]) {
                         size_t p = (size_t)y * j->w + x;
                         int hit = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
                         j->tri[p] = hit ? rh.hit.primID[k] : RT_NO_HIT;
@@ -305,7 +473,9 @@ static void *emb_worker(void *arg)
                     if (x >= j->w || y >= j->h)
                         continue;
                     size_t p = (size_t)y * j->w + x;
-                    const rt_ray *r = &j->rays[p];
+                    if (active && !active[p])
+                        continue;
+                    const rt_ray *r = &rays[p];
                     struct RTCRayHit rh;
                     rh.ray.org_x = r->ox;
                     rh.ray.org_y = r->oy;
@@ -331,15 +501,16 @@ static void *emb_worker(void *arg)
     return NULL;
 }
 
-/* One frame with `threads` threads; returns the seconds it took. */
-static double emb_frame(RTCScene scene, const rt_ray *rays, unsigned w, unsigned h, uint32_t *tri,
+/* One frame of the ray set with `threads` threads; returns the seconds it
+ * took. */
+static double emb_frame(RTCScene scene, const ray_set *set, unsigned w, unsigned h, uint32_t *tri,
                         float *t, int packet, unsigned threads)
 {
     emb_job jobs[2];
     pthread_t th[2];
     double t0 = sr_clock_seconds();
     for (unsigned i = 0; i < threads; ++i) {
-        jobs[i] = (emb_job){scene, rays, w, h, tri, t, packet, i, threads};
+        jobs[i] = (emb_job){scene, set, w, h, tri, t, packet, i, threads};
         if (i > 0 && pthread_create(&th[i], NULL, emb_worker, &jobs[i]) != 0) {
             fprintf(stderr, PROG ": pthread_create failed\n");
             exit(2);
@@ -361,6 +532,20 @@ typedef struct peer_hits {
     float *t;
 } peer_hits;
 
+/* What the peers measured on one ray set. */
+typedef struct set_result {
+    size_t rays;
+    double hit_fraction; /* of the set's rays, by fused */
+    double fused_s, stream_s, c_s;
+    double emb_s[2][2]; /* [packet 1 / 16][1 / 2 threads] */
+    const char *emb_best_name;
+    double emb_best_s;
+    unsigned emb_best_threads;
+    /* hit agreement over the set's rays: same triangle (or both miss); and
+     * same t within 1e-4 */
+    double agree_stream, agree_c, agree_emb_tri, agree_emb_t;
+} set_result;
+
 typedef struct scene_result {
     const char *name;
     size_t triangles;
@@ -368,16 +553,10 @@ typedef struct scene_result {
     unsigned min_dim; /* the tracer's automatic choice */
     uint32_t dims[3];
     size_t grid_entries;
-    double hit_fraction;
     double grid_host_s, grid_device_s, tracer_create_s[2];
-    double fused_s, stream_s, c_s;
     int embree;
-    double emb_build_s, emb_s[2][2]; /* [packet 1 / 16][1 / 2 threads] */
-    const char *emb_best_name;
-    double emb_best_s;
-    unsigned emb_best_threads;
-    /* hit agreement: same triangle (or both miss); and same t within 1e-4 */
-    double agree_stream, agree_c, agree_emb_tri, agree_emb_t;
+    double emb_build_s;
+    set_result primary, bounce;
 } scene_result;
 
 static peer_hits hits_alloc(size_t n)
@@ -400,26 +579,30 @@ static void hits_from_rt(const rt_ray *rays, const rt_hit *h, size_t n, peer_hit
     }
 }
 
-static double agree_tri(const peer_hits *a, const peer_hits *b, size_t n)
+/* Over the rays of `set` (by their pixels). */
+static double agree_tri(const peer_hits *a, const peer_hits *b, const ray_set *set)
 {
     size_t same = 0;
-    for (size_t i = 0; i < n; ++i)
-        same += a->tri[i] == b->tri[i];
-    return n ? (double)same / (double)n : 1.0;
+    for (size_t i = 0; i < set->n; ++i) {
+        uint32_t p = set->rays[i].pixel;
+        same += a->tri[p] == b->tri[p];
+    }
+    return set->n ? (double)same / (double)set->n : 1.0;
 }
 
 #ifdef HAVE_EMBREE
-static double agree_t(const peer_hits *a, const peer_hits *b, size_t n)
+static double agree_t(const peer_hits *a, const peer_hits *b, const ray_set *set)
 {
     size_t same = 0;
-    for (size_t i = 0; i < n; ++i) {
-        int ha = a->tri[i] != RT_NO_HIT, hb = b->tri[i] != RT_NO_HIT;
+    for (size_t i = 0; i < set->n; ++i) {
+        uint32_t p = set->rays[i].pixel;
+        int ha = a->tri[p] != RT_NO_HIT, hb = b->tri[p] != RT_NO_HIT;
         if (!ha && !hb)
             ++same;
-        else if (ha && hb && fabsf(a->t[i] - b->t[i]) <= 1e-4f * fmaxf(1.0f, fabsf(a->t[i])))
+        else if (ha && hb && fabsf(a->t[p] - b->t[p]) <= 1e-4f * fmaxf(1.0f, fabsf(a->t[p])))
             ++same;
     }
-    return n ? (double)same / (double)n : 1.0;
+    return set->n ? (double)same / (double)set->n : 1.0;
 }
 #endif
 
@@ -430,7 +613,8 @@ static sr_scene *load_scene(const char *name)
     sr_scene_load_options o = {0};
     o.flags = SR_SCENE_ALLOW_NO_LIGHT;
     sr_scene *sc = NULL;
-    const char *path = strcmp(name, "bunny-close") == 0 ? BENCH_SCENES_DIR "/bunny-close.json" : name;
+    const char *path =
+        strcmp(name, "bunny-close") == 0 ? BENCH_SCENES_DIR "/bunny-close.json" : name;
     if (sr_scene_load(path, &o, &sc, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, PROG ": %s\n", err);
         return NULL;
@@ -461,7 +645,7 @@ static rt_tracer *make_tracer(const sr_scene *sc, rt_exec exec, unsigned min_dim
     return t;
 }
 
-/* Frames per peer and round (see run_scene). */
+/* Frames per peer and round (see time_peers). */
 #define BENCH_BURST 8u
 
 /* Keeps the best frame of the timed rounds: frame f of round `round`, where
@@ -505,6 +689,102 @@ static double c_frame(const cgrid *cg, const rt_ray *rays, size_t n, rt_hit *out
     return sr_clock_seconds() - t0;
 }
 
+/* The peers of one scene, set up once and timed on each ray set. */
+typedef struct peers {
+    unsigned w, h;
+    rt_tracer *tf, *ts; /* Sluice, fused and stream */
+    cgrid cg;
+#ifdef HAVE_EMBREE
+    RTCScene es;
+#endif
+} peers;
+
+#ifdef HAVE_EMBREE
+static const int emb_packets[2] = {1, 16};
+#endif
+
+/* Times every peer on the ray set `set` and compares their hits. `c_hits`
+ * (set->n records) receives the C tracer's hits in stream order. */
+static void time_peers(const peers *pe, const ray_set *set, unsigned reps, set_result *res,
+                       rt_hit *c_hits)
+{
+    size_t n = set->n, npix = (size_t)pe->w * pe->h;
+    memset(res, 0, sizeof *res);
+    res->rays = n;
+    if (n == 0)
+        return;
+    sluice_stream *rays_s = NULL, *hits_f = NULL, *hits_s = NULL;
+    TRY(sluice_stream_create(ctx, sizeof(rt_ray), n, &rays_s));
+    TRY(sluice_stream_create(ctx, sizeof(rt_hit), n, &hits_f));
+    TRY(sluice_stream_create(ctx, sizeof(rt_hit), n, &hits_s));
+    TRY(sluice_stream_upload(rays_s, set->rays, n));
+    peer_hits fused = hits_alloc(npix), stream = hits_alloc(npix), cref = hits_alloc(npix);
+#ifdef HAVE_EMBREE
+    peer_hits emb = hits_alloc(npix);
+#endif
+
+    /* Interleaved rounds: each round times every peer in a burst of
+     * BENCH_BURST frames back to back, so that each is measured warm (its
+     * data in cache, its threads awake: on these shared 2-core machines a
+     * frame after an idle or single-threaded spell was up to 50% slower, for
+     * every peer), and a slow spell of the machine falls on all peers alike
+     * rather than on whichever ran then. The bursts are 8 frames because
+     * Sluice's frames (bunny, fused) came down gradually over the first 5-8
+     * of a burst, after the C tracer's frames as after 200 ms of sleep (from
+     * about 7.5 to 5 ms), where Embree's were flat from the first. Round 0
+     * is a warm-up; every time is the best frame of the other `reps`
+     * rounds. */
+    for (unsigned r = 0; r <= reps; ++r) {
+        for (unsigned f = 0; f < BENCH_BURST; ++f)
+            keep_best(&res->fused_s, r, f, sluice_frame(pe->tf, rays_s, n, hits_f));
+        for (unsigned f = 0; f < BENCH_BURST; ++f)
+            keep_best(&res->stream_s, r, f, sluice_frame(pe->ts, rays_s, n, hits_s));
+        for (unsigned f = 0; f < BENCH_BURST; ++f)
+            keep_best(&res->c_s, r, f, c_frame(&pe->cg, set->rays, n, c_hits));
+#ifdef HAVE_EMBREE
+        for (int p = 0; p < 2; ++p)
+            for (unsigned th = 1; th <= 2; ++th)
+                for (unsigned f = 0; f < BENCH_BURST; ++f)
+                    keep_best(
+                        &res->emb_s[p][th - 1], r, f,
+                        emb_frame(pe->es, set, pe->w, pe->h, emb.tri, emb.t, emb_packets[p], th));
+#endif
+    }
+    sluice_hits(hits_f, set->rays, n, &fused);
+    sluice_hits(hits_s, set->rays, n, &stream);
+    hits_from_rt(set->rays, c_hits, n, &cref);
+    sluice_stream_destroy(rays_s);
+    sluice_stream_destroy(hits_f);
+    sluice_stream_destroy(hits_s);
+
+    size_t hit = 0;
+    for (size_t i = 0; i < n; ++i)
+        hit += fused.tri[set->rays[i].pixel] != RT_NO_HIT;
+    res->hit_fraction = (double)hit / (double)n;
+    res->agree_stream = agree_tri(&fused, &stream, set);
+    res->agree_c = agree_tri(&fused, &cref, set);
+
+#ifdef HAVE_EMBREE
+    /* Embree's best on the cores Sluice has: 2 threads normally, 1 when the
+     * other core is busy and 2 threads lose */
+    res->emb_best_s = 1e30;
+    for (int p = 0; p < 2; ++p)
+        for (unsigned th = 1; th <= 2; ++th)
+            if (res->emb_s[p][th - 1] < res->emb_best_s) {
+                res->emb_best_s = res->emb_s[p][th - 1];
+                res->emb_best_threads = th;
+                res->emb_best_name = emb_packets[p] == 16 ? "rtcIntersect16" : "rtcIntersect1";
+            }
+    /* the hits of the last run (rtcIntersect16, 2 threads) */
+    res->agree_emb_tri = agree_tri(&fused, &emb, set);
+    res->agree_emb_t = agree_t(&fused, &emb, set);
+    hits_free(&emb);
+#endif
+    hits_free(&fused);
+    hits_free(&stream);
+    hits_free(&cref);
+}
+
 static int run_scene(const char *name, unsigned size, unsigned reps, scene_result *res)
 {
     char err[512];
@@ -515,11 +795,6 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     res->name = name;
     res->triangles = sr_scene_triangle_count(sc);
     res->w = res->h = size;
-    size_t n = (size_t)size * size;
-    rt_ray *rays = eye_rays(sc, size, size);
-    rt_ray *by_pixel = xmalloc(n * sizeof *by_pixel);
-    for (size_t i = 0; i < n; ++i)
-        by_pixel[rays[i].pixel] = rays[i];
 
     /* the grid: plain C build (also the C tracer's) and the device build */
     const sr_scene_stats *ss = sr_scene_statistics(sc);
@@ -576,17 +851,12 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
 
     /* the peers: (a), (b) Sluice, rays already on the device, (c) plain C,
      * (d) Embree */
-    sluice_stream *rays_s = NULL, *hits_f = NULL, *hits_s = NULL;
-    TRY(sluice_stream_create(ctx, sizeof(rt_ray), n, &rays_s));
-    TRY(sluice_stream_create(ctx, sizeof(rt_hit), n, &hits_f));
-    TRY(sluice_stream_create(ctx, sizeof(rt_hit), n, &hits_s));
-    TRY(sluice_stream_upload(rays_s, rays, n));
-    rt_tracer *tf = make_tracer(sc, RT_EXEC_FUSED, min_dim, 0, &res->tracer_create_s[0]);
-    rt_tracer *ts = make_tracer(sc, RT_EXEC_STREAM, min_dim, 0, &res->tracer_create_s[1]);
-    cgrid cg;
-    cgrid_init(&cg, &gh, sc);
-    rt_hit *ch = xmalloc(n * sizeof *ch);
-    peer_hits fused = hits_alloc(n), stream = hits_alloc(n), cref = hits_alloc(n);
+    peers pe;
+    memset(&pe, 0, sizeof pe);
+    pe.w = pe.h = size;
+    pe.tf = make_tracer(sc, RT_EXEC_FUSED, min_dim, 0, &res->tracer_create_s[0]);
+    pe.ts = make_tracer(sc, RT_EXEC_STREAM, min_dim, 0, &res->tracer_create_s[1]);
+    cgrid_init(&pe.cg, &gh, sc);
 #ifdef HAVE_EMBREE
     res->embree = 1;
     RTCDevice dev = rtcNewDevice(NULL);
@@ -594,8 +864,8 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
         fprintf(stderr, PROG ": rtcNewDevice failed\n");
         exit(2);
     }
-    RTCScene es = rtcNewScene(dev);
-    rtcSetSceneBuildQuality(es, RTC_BUILD_QUALITY_HIGH);
+    pe.es = rtcNewScene(dev);
+    rtcSetSceneBuildQuality(pe.es, RTC_BUILD_QUALITY_HIGH);
     RTCGeometry geo = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
     size_t nv = sr_scene_vertex_count(sc);
     float *vb = rtcSetNewGeometryBuffer(geo, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -610,87 +880,34 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     memcpy(ib, sr_scene_indices(sc), 3 * res->triangles * sizeof(uint32_t));
     double t0 = sr_clock_seconds();
     rtcCommitGeometry(geo);
-    rtcAttachGeometry(es, geo);
+    rtcAttachGeometry(pe.es, geo);
     rtcReleaseGeometry(geo);
-    rtcCommitScene(es);
+    rtcCommitScene(pe.es);
     res->emb_build_s = sr_clock_seconds() - t0;
     if (rtcGetDeviceError(dev) != RTC_ERROR_NONE) {
         fprintf(stderr, PROG ": Embree scene build failed\n");
         exit(2);
     }
-    peer_hits emb = hits_alloc(n);
-    static const int packets[2] = {1, 16};
 #endif
 
-    /* Interleaved rounds: each round times every peer in a burst of
-     * BENCH_BURST frames back to back, so that each is measured warm (its
-     * data in cache, its threads awake: on these shared 2-core machines a
-     * frame after an idle or single-threaded spell was up to 50% slower, for
-     * every peer), and a slow spell of the machine falls on all peers alike
-     * rather than on whichever ran then. The bursts are 8 frames because
-     * Sluice's frames (bunny, fused) came down gradually over the first 5-8
-     * of a burst, after the C tracer's frames as after 200 ms of sleep (from
-     * about 7.5 to 5 ms), where Embree's were flat from the first. Round 0
-     * is a warm-up; every time is the best frame of the other `reps`
-     * rounds. */
-    for (unsigned r = 0; r <= reps; ++r) {
-        for (unsigned f = 0; f < BENCH_BURST; ++f)
-            keep_best(&res->fused_s, r, f, sluice_frame(tf, rays_s, n, hits_f));
-        for (unsigned f = 0; f < BENCH_BURST; ++f)
-            keep_best(&res->stream_s, r, f, sluice_frame(ts, rays_s, n, hits_s));
-        for (unsigned f = 0; f < BENCH_BURST; ++f)
-            keep_best(&res->c_s, r, f, c_frame(&cg, rays, n, ch));
-#ifdef HAVE_EMBREE
-        for (int p = 0; p < 2; ++p)
-            for (unsigned th = 1; th <= 2; ++th)
-                for (unsigned f = 0; f < BENCH_BURST; ++f)
-                    keep_best(&res->emb_s[p][th - 1], r, f,
-                              emb_frame(es, by_pixel, size, size, emb.tri, emb.t, packets[p], th));
-#endif
-    }
-    sluice_hits(hits_f, rays, n, &fused);
-    sluice_hits(hits_s, rays, n, &stream);
-    hits_from_rt(rays, ch, n, &cref);
-    rt_tracer_destroy(tf);
-    rt_tracer_destroy(ts);
-    sluice_stream_destroy(rays_s);
-    sluice_stream_destroy(hits_f);
-    sluice_stream_destroy(hits_s);
-    free(ch);
-    free(cg.tv);
-    rt_grid_host_free(&gh);
-
-    size_t hit = 0;
-    for (size_t i = 0; i < n; ++i)
-        hit += fused.tri[i] != RT_NO_HIT;
-    res->hit_fraction = n ? (double)hit / (double)n : 0.0;
-    res->agree_stream = agree_tri(&fused, &stream, n);
-    res->agree_c = agree_tri(&fused, &cref, n);
+    /* primary rays, then the diffuse bounce rays off the C tracer's hits */
+    ray_set prim = primary_set(sc, size, size);
+    rt_hit *ch = xmalloc(prim.n * sizeof *ch);
+    time_peers(&pe, &prim, reps, &res->primary, ch);
+    ray_set bounce = bounce_set(&prim, ch, pe.cg.tv, sr_scene_epsilon(sc), size, size);
+    time_peers(&pe, &bounce, reps, &res->bounce, ch);
 
 #ifdef HAVE_EMBREE
-    /* Embree's best on the cores Sluice has: 2 threads normally, 1 when the
-     * other core is busy and 2 threads lose */
-    res->emb_best_s = 1e30;
-    for (int p = 0; p < 2; ++p)
-        for (unsigned th = 1; th <= 2; ++th)
-            if (res->emb_s[p][th - 1] < res->emb_best_s) {
-                res->emb_best_s = res->emb_s[p][th - 1];
-                res->emb_best_threads = th;
-                res->emb_best_name = packets[p] == 16 ? "rtcIntersect16" : "rtcIntersect1";
-            }
-    /* the hits of the last run (rtcIntersect16, 2 threads) */
-    res->agree_emb_tri = agree_tri(&fused, &emb, n);
-    res->agree_emb_t = agree_t(&fused, &emb, n);
-    hits_free(&emb);
-    rtcReleaseScene(es);
+    rtcReleaseScene(pe.es);
     rtcReleaseDevice(dev);
 #endif
-
-    hits_free(&fused);
-    hits_free(&stream);
-    hits_free(&cref);
-    free(rays);
-    free(by_pixel);
+    rt_tracer_destroy(pe.tf);
+    rt_tracer_destroy(pe.ts);
+    free(ch);
+    free(pe.cg.tv);
+    rt_grid_host_free(&gh);
+    ray_set_free(&prim);
+    ray_set_free(&bounce);
     sr_scene_destroy(sc);
     return 1;
 }
@@ -760,7 +977,7 @@ static void usage(FILE *f)
     fprintf(f, "usage: " PROG " [--size N] [--reps R] [--scene NAME]... [--out FILE]\n"
                "                      [--purcell-size N] [--skip-purcell] [--quick]\n"
                "  --size N          image side for the rays/s comparison (default 512)\n"
-               "  --reps R          timed rounds, each running every peer for 3 frames;\n"
+               "  --reps R          timed rounds, each running every peer for 8 frames;\n"
                "                    the best frame of each peer is kept (default 10)\n"
                "  --scene NAME      scene (default cornell, bunny and bunny-close: the bunny\n"
                "                    filling most of the frame); repeatable\n"
@@ -773,6 +990,123 @@ static void usage(FILE *f)
 static double rate(size_t n, double s)
 {
     return s > 0 ? (double)n / s : 0.0;
+}
+
+static void table_header(const char *count)
+{
+    printf("%-11s %9s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s\n", "scene", count, "fused", "stream",
+           "C 1t", "Emb 1t", "Emb 2t", "f/Emb", "s/f", "f/C", "=stream", "=Embree");
+}
+
+static void table_legend(void)
+{
+    printf("(Emb 1t, 2t: Embree's faster of rtcIntersect1 and rtcIntersect16 on 1 and 2 threads; "
+           "f/Emb: fused over Embree's best; s/f: stream over fused; f/C: fused "
+           "over 1-thread C; =: same hit triangle as fused)\n");
+}
+
+/* One row of a rays/s table: the set `s` of scene `r`, `count` in the
+ * second column. */
+static void table_row(const scene_result *r, const set_result *s, size_t count)
+{
+    size_t n = s->rays;
+    if (n == 0)
+        printf("%-11s %9zu (no rays)\n", r->name, count);
+    else if (r->embree)
+        printf("%-11s %9zu %8.2f %8.2f %8.2f %8.2f %8.2f %8.3f %8.3f %8.2f %7.2f%% %7.2f%%\n",
+               r->name, count, rate(n, s->fused_s) / 1e6, rate(n, s->stream_s) / 1e6,
+               rate(n, s->c_s) / 1e6, rate(n, fmin(s->emb_s[0][0], s->emb_s[1][0])) / 1e6,
+               rate(n, fmin(s->emb_s[0][1], s->emb_s[1][1])) / 1e6, s->emb_best_s / s->fused_s,
+               s->fused_s / s->stream_s, s->c_s / s->fused_s, 100 * s->agree_stream,
+               100 * s->agree_emb_tri);
+    else
+        printf("%-11s %9zu %8.2f %8.2f %8.2f %8s %8s %8s %8.3f %8.2f %7.2f%% %8s\n", r->name, count,
+               rate(n, s->fused_s) / 1e6, rate(n, s->stream_s) / 1e6, rate(n, s->c_s) / 1e6, "-",
+               "-", "-", s->fused_s / s->stream_s, s->c_s / s->fused_s, 100 * s->agree_stream, "-");
+}
+
+/* Embree's four variants on the set `s` and its agreement in t. */
+static void embree_detail(const scene_result *r, const set_result *s)
+{
+    if (!r->embree)
+        return;
+    size_t n = s->rays;
+    printf("; Embree 1/16-wide 1t %.2f/%.2f, 2t %.2f/%.2f M rays/s, same t %.2f%%",
+           rate(n, s->emb_s[0][0]) / 1e6, rate(n, s->emb_s[1][0]) / 1e6,
+           rate(n, s->emb_s[0][1]) / 1e6, rate(n, s->emb_s[1][1]) / 1e6, 100 * s->agree_emb_t);
+}
+
+/* 0 when a Sluice mode or the C tracer disagrees with fused on more than 1%
+ * of the set's rays (`what`); warns when Embree does. */
+static int check_agreement(const scene_result *r, const set_result *s, const char *what)
+{
+    int ok = 1;
+    if (s->agree_stream < 0.99 || s->agree_c < 0.99) {
+        fprintf(stderr, PROG ": %s: hits disagree (stream %.4f, C %.4f of %s)\n", r->name,
+                s->agree_stream, s->agree_c, what);
+        ok = 0;
+    }
+    if (r->embree && s->agree_emb_tri < 0.99)
+        fprintf(stderr, PROG ": warning: %s: Embree agrees on %.2f%% of %s only\n", r->name,
+                100 * s->agree_emb_tri, what);
+    return ok;
+}
+
+/* The JSON of one ray set's figures: rays_per_second, seconds, ratios and
+ * hit_agreement, each on a line of its own after `indent`; `bvh_s` (the
+ * primary set's Embree build time) is added to seconds when >= 0. */
+static void json_set(FILE *f, const char *indent, const scene_result *r, const set_result *s,
+                     double bvh_s)
+{
+    size_t n = s->rays;
+    fprintf(f,
+            "%s\"rays_per_second\": {\"sluice_fused\": %.1f, \"sluice_stream\": %.1f, "
+            "\"c_grid_1thread\": %.1f",
+            indent, rate(n, s->fused_s), rate(n, s->stream_s), rate(n, s->c_s));
+    if (r->embree)
+        fprintf(f,
+                ", \"embree_best\": %.1f, \"embree_intersect1_1thread\": %.1f, "
+                "\"embree_intersect1_2threads\": "
+                "%.1f, \"embree_intersect16_1thread\": %.1f, "
+                "\"embree_intersect16_2threads\": %.1f",
+                rate(n, s->emb_best_s), rate(n, s->emb_s[0][0]), rate(n, s->emb_s[0][1]),
+                rate(n, s->emb_s[1][0]), rate(n, s->emb_s[1][1]));
+    else
+        fprintf(f, ", \"embree_best\": null");
+    fprintf(f, "},\n");
+    fprintf(f,
+            "%s\"seconds\": {\"sluice_fused\": %.6f, \"sluice_stream\": %.6f, "
+            "\"c_grid_1thread\": %.6f",
+            indent, s->fused_s, s->stream_s, s->c_s);
+    if (r->embree) {
+        fprintf(f, ", \"embree_best\": %.6f", s->emb_best_s);
+        if (bvh_s >= 0)
+            fprintf(f, ", \"embree_bvh_build\": %.6f", bvh_s);
+    }
+    fprintf(f, "},\n");
+    fprintf(f, "%s\"ratios\": {\"fused_over_embree\": ", indent);
+    if (r->embree)
+        fprintf(f, "%.4f", s->emb_best_s / s->fused_s);
+    else
+        fprintf(f, "null");
+    fprintf(f,
+            ", \"stream_over_fused\": %.4f, \"fused_over_c\": %.4f, "
+            "\"embree_best_is\": ",
+            s->fused_s / s->stream_s, s->c_s / s->fused_s);
+    if (r->embree)
+        fprintf(f, "\"%s, %u thread%s\"", s->emb_best_name, s->emb_best_threads,
+                s->emb_best_threads > 1 ? "s" : "");
+    else
+        fprintf(f, "null");
+    fprintf(f, "},\n");
+    fprintf(f,
+            "%s\"hit_agreement\": {\"fused_vs_stream\": %.6f, \"fused_vs_c\": %.6f, "
+            "\"fused_vs_embree_triangle\": ",
+            indent, s->agree_stream, s->agree_c);
+    if (r->embree)
+        fprintf(f, "%.6f, \"fused_vs_embree_t\": %.6f}", s->agree_emb_tri, s->agree_emb_t);
+    else
+        fprintf(f, "null, \"fused_vs_embree_t\": null}");
 }
 
 int main(int argc, char **argv)
@@ -842,12 +1176,10 @@ int main(int argc, char **argv)
 
     scene_result res[MAX_SCENES];
     int status = 0;
-    size_t n = (size_t)size * size;
     printf("\nprimary rays, %ux%u, one per pixel centre, best frame of %u interleaved rounds; M "
            "rays/s\n",
            size, size, reps);
-    printf("%-10s %9s %8s %8s %8s %8s %8s %8s %8s %8s %8s %8s\n", "scene", "triangles", "fused",
-           "stream", "C 1t", "Emb 1t", "Emb 2t", "f/Emb", "s/f", "f/C", "=stream", "=Embree");
+    table_header("triangles");
     for (size_t i = 0; i < nscenes; ++i) {
         scene_result *r = &res[i];
         if (!run_scene(scenes[i], size, reps, r)) {
@@ -855,45 +1187,48 @@ int main(int argc, char **argv)
             r->name = NULL;
             continue;
         }
-        if (r->embree)
-            printf("%-10s %9zu %8.2f %8.2f %8.2f %8.2f %8.2f %8.3f %8.3f %8.2f %7.2f%% %7.2f%%\n",
-                   r->name, r->triangles, rate(n, r->fused_s) / 1e6, rate(n, r->stream_s) / 1e6,
-                   rate(n, r->c_s) / 1e6, rate(n, fmin(r->emb_s[0][0], r->emb_s[1][0])) / 1e6,
-                   rate(n, fmin(r->emb_s[0][1], r->emb_s[1][1])) / 1e6, r->emb_best_s / r->fused_s,
-                   r->fused_s / r->stream_s, r->c_s / r->fused_s, 100 * r->agree_stream,
-                   100 * r->agree_emb_tri);
-        else
-            printf("%-10s %9zu %8.2f %8.2f %8.2f %8s %8s %8s %8.3f %8.2f %7.2f%% %8s\n", r->name,
-                   r->triangles, rate(n, r->fused_s) / 1e6, rate(n, r->stream_s) / 1e6,
-                   rate(n, r->c_s) / 1e6, "-", "-", "-", r->fused_s / r->stream_s,
-                   r->c_s / r->fused_s, 100 * r->agree_stream, "-");
-        if (r->agree_stream < 0.99 || r->agree_c < 0.99) {
-            fprintf(stderr, PROG ": %s: hits disagree (stream %.4f, C %.4f of pixels)\n", r->name,
-                    r->agree_stream, r->agree_c);
+        table_row(r, &r->primary, r->triangles);
+        if (!check_agreement(r, &r->primary, "pixels"))
             status = 1;
-        }
-        if (r->embree && r->agree_emb_tri < 0.99)
-            fprintf(stderr, PROG ": warning: %s: Embree agrees on %.2f%% of pixels only\n", r->name,
-                    100 * r->agree_emb_tri);
     }
-    printf("(Emb 1t, 2t: Embree's faster of rtcIntersect1 and rtcIntersect16 on 1 and 2 threads; "
-           "f/Emb: fused over Embree's best; s/f: stream over fused; f/C: fused "
-           "over 1-thread C; =: same hit triangle as fused)\n");
+    table_legend();
     for (size_t i = 0; i < nscenes; ++i) {
         scene_result *r = &res[i];
         if (!r->name)
             continue;
-        printf("%-10s grid %ux%ux%u, %zu entries: C build %.4f s, device build %.4f s; tracer "
+        printf("%-11s grid %ux%ux%u, %zu entries: C build %.4f s, device build %.4f s; tracer "
                "create %.3f s (fused) %.3f s (stream); hits %.1f%%; =C %.2f%%",
                r->name, r->dims[0], r->dims[1], r->dims[2], r->grid_entries, r->grid_host_s,
                r->grid_device_s, r->tracer_create_s[0], r->tracer_create_s[1],
-               100 * r->hit_fraction, 100 * r->agree_c);
+               100 * r->primary.hit_fraction, 100 * r->primary.agree_c);
+        embree_detail(r, &r->primary);
         if (r->embree)
-            printf("; Embree BVH %.4f s, 1/16-wide 1t %.2f/%.2f, 2t %.2f/%.2f M rays/s, same t "
-                   "%.2f%%",
-                   r->emb_build_s, rate(n, r->emb_s[0][0]) / 1e6, rate(n, r->emb_s[1][0]) / 1e6,
-                   rate(n, r->emb_s[0][1]) / 1e6, rate(n, r->emb_s[1][1]) / 1e6,
-                   100 * r->agree_emb_t);
+            printf("; Embree BVH %.4f s", r->emb_build_s);
+        printf("\n");
+    }
+
+    printf("\ndiffuse bounce rays, one per pixel whose primary ray hit (cosine-weighted about the "
+           "geometric normal, from the hit offset by scene_eps), the same rounds; M rays/s\n");
+    table_header("rays");
+    for (size_t i = 0; i < nscenes; ++i) {
+        scene_result *r = &res[i];
+        if (!r->name)
+            continue;
+        table_row(r, &r->bounce, r->bounce.rays);
+        if (!check_agreement(r, &r->bounce, "bounce rays"))
+            status = 1;
+    }
+    table_legend();
+    for (size_t i = 0; i < nscenes; ++i) {
+        scene_result *r = &res[i];
+        if (!r->name)
+            continue;
+        printf("%-11s %zu bounce rays (%.1f%% of the pixels), %.1f%% of them hit; =C %.2f%%",
+               r->name, r->bounce.rays,
+               100 * (double)r->bounce.rays / ((double)r->w * (double)r->h),
+               100 * r->bounce.hit_fraction, 100 * r->bounce.agree_c);
+        if (r->bounce.rays)
+            embree_detail(r, &r->bounce);
         printf("\n");
     }
 
@@ -949,13 +1284,18 @@ int main(int argc, char **argv)
         fprintf(f,
                 "  \"setup\": {\"width\": %u, \"height\": %u, \"rays_per_pixel\": 1, \"rays\": "
                 "\"primary, through the pixel centres, the scene's camera, 8x8-tile order\", "
+                "\"bounce_rays\": \"diffuse bounce: one per pixel whose primary ray hit (the C "
+                "tracer's hits), from the hit point offset by scene_eps (sr_scene_epsilon) along "
+                "the geometric normal facing the ray, cosine-weighted about it from a hash of the "
+                "pixel (seed 0x%x), tmin 0, tmax infinity, path-ray flags; primary order, "
+                "compacted; Embree: other pixels inactive, INCOHERENT context\", "
                 "\"reps\": %u, \"timing\": \"interleaved rounds, each timing every peer for %u "
                 "frames back to back; the best frame of reps rounds after a warm-up round; "
                 "Sluice: trace only, "
                 "rays and hits in device streams\", \"grid_min_dim\": \"auto "
                 "(rt_grid_auto_min_dim_edge with rt_grid_edge_quartile, per scene)\", \"quick\": "
                 "%s},\n",
-                size, size, reps, BENCH_BURST, quick ? "true" : "false");
+                size, size, BOUNCE_SEED, reps, BENCH_BURST, quick ? "true" : "false");
 #ifdef HAVE_EMBREE
         fprintf(f,
                 "  \"embree\": {\"available\": true, \"version\": \"%s\", \"build_quality\": "
@@ -975,7 +1315,7 @@ int main(int argc, char **argv)
             if (!r->name)
                 continue;
             fprintf(f, "%s\n    {\"scene\": \"%s\", \"triangles\": %zu, \"hit_fraction\": %.6f,\n",
-                    first ? "" : ",", r->name, r->triangles, r->hit_fraction);
+                    first ? "" : ",", r->name, r->triangles, r->primary.hit_fraction);
             first = 0;
             fprintf(f,
                     "     \"grid\": {\"min_dim\": %u, \"dims\": [%u, %u, %u], \"entries\": %zu, "
@@ -984,52 +1324,14 @@ int main(int argc, char **argv)
                     "\"tracer_create_seconds_stream\": %.6f},\n",
                     r->min_dim, r->dims[0], r->dims[1], r->dims[2], r->grid_entries, r->grid_host_s,
                     r->grid_device_s, r->tracer_create_s[0], r->tracer_create_s[1]);
-            fprintf(f,
-                    "     \"rays_per_second\": {\"sluice_fused\": %.1f, \"sluice_stream\": %.1f, "
-                    "\"c_grid_1thread\": %.1f",
-                    rate(n, r->fused_s), rate(n, r->stream_s), rate(n, r->c_s));
-            if (r->embree)
-                fprintf(f,
-                        ", \"embree_best\": %.1f, \"embree_intersect1_1thread\": %.1f, "
-                        "\"embree_intersect1_2threads\": "
-                        "%.1f, \"embree_intersect16_1thread\": %.1f, "
-                        "\"embree_intersect16_2threads\": %.1f",
-                        rate(n, r->emb_best_s), rate(n, r->emb_s[0][0]), rate(n, r->emb_s[0][1]),
-                        rate(n, r->emb_s[1][0]), rate(n, r->emb_s[1][1]));
-            else
-                fprintf(f, ", \"embree_best\": null");
-            fprintf(f, "},\n");
-            fprintf(f,
-                    "     \"seconds\": {\"sluice_fused\": %.6f, \"sluice_stream\": %.6f, "
-                    "\"c_grid_1thread\": %.6f",
-                    r->fused_s, r->stream_s, r->c_s);
-            if (r->embree)
-                fprintf(f, ", \"embree_best\": %.6f, \"embree_bvh_build\": %.6f", r->emb_best_s,
-                        r->emb_build_s);
-            fprintf(f, "},\n");
-            fprintf(f, "     \"ratios\": {\"fused_over_embree\": ");
-            if (r->embree)
-                fprintf(f, "%.4f", r->emb_best_s / r->fused_s);
-            else
-                fprintf(f, "null");
-            fprintf(f,
-                    ", \"stream_over_fused\": %.4f, \"fused_over_c\": %.4f, "
-                    "\"embree_best_is\": ",
-                    r->fused_s / r->stream_s, r->c_s / r->fused_s);
-            if (r->embree)
-                fprintf(f, "\"%s, %u thread%s\"", r->emb_best_name, r->emb_best_threads,
-                        r->emb_best_threads > 1 ? "s" : "");
-            else
-                fprintf(f, "null");
-            fprintf(f, "},\n");
-            fprintf(f,
-                    "     \"hit_agreement\": {\"fused_vs_stream\": %.6f, \"fused_vs_c\": %.6f, "
-                    "\"fused_vs_embree_triangle\": ",
-                    r->agree_stream, r->agree_c);
-            if (r->embree)
-                fprintf(f, "%.6f, \"fused_vs_embree_t\": %.6f}}", r->agree_emb_tri, r->agree_emb_t);
-            else
-                fprintf(f, "null, \"fused_vs_embree_t\": null}}");
+            json_set(f, "     ", r, &r->primary, r->emb_build_s);
+            fprintf(f, ",\n     \"bounce\": {\"rays\": %zu, \"hit_fraction\": %.6f", r->bounce.rays,
+                    r->bounce.hit_fraction);
+            if (r->bounce.rays) {
+                fprintf(f, ",\n");
+                json_set(f, "       ", r, &r->bounce, -1.0);
+            }
+            fprintf(f, "}}");
         }
         fprintf(f, "\n  ],\n");
         if (skip_purcell) {
