@@ -18,7 +18,10 @@
  *
  * Also: the three builds give the same results bit for bit, the summed
  * power matches the photons listed, the normal filter, exact mode in
- * several batches, statistics and the error paths. */
+ * several batches, statistics and the error paths; and the radius search
+ * (PM_KNN_RADIUS) over the dense grid and the hashed one (Purcell 6.4.4)
+ * against brute force and FLANN's radius search, photon set by photon set
+ * (test_radius), with what a hashed grid refuses. */
 #include "check.h"
 #include "knn.h"
 
@@ -384,6 +387,390 @@ static void test_cases(fixture *fx)
     free(qs);
 }
 
+/* The radius search (PM_KNN_RADIUS, progressive photon mapping's) over the
+ * dense grid and over the hashed one (Purcell 6.4.4) against brute force by
+ * the kernel's own arithmetic and against FLANN's radius search: the same
+ * photon sets exactly, compared as sorted index lists. FLANN keeps
+ * d2 < radius where the kernel keeps d2 <= r^2, and computes d2 in the same
+ * order ((dx^2 + dy^2) + dz^2, no fused multiply-adds): asked for the next
+ * float above r^2, its set is the kernel's to the last photon. */
+typedef struct radius_ref {
+    uint32_t *start; /* nq + 1: query q's photons are ids[start[q] .. start[q + 1]) */
+    uint32_t *ids;   /* ascending within a query */
+    float *r2;       /* the farthest one's squared distance (0 when none) */
+    double *sr;      /* summed red power */
+    uint32_t most;   /* largest count */
+} radius_ref;
+
+static void radius_ref_free(radius_ref *r)
+{
+    free(r->start);
+    free(r->ids);
+    free(r->r2);
+    free(r->sr);
+    memset(r, 0, sizeof *r);
+}
+
+/* Brute force with the kernel's float arithmetic (-ffp-contract=off). */
+static void radius_brute(const pm_photon *ph, size_t np, const pm_query *qs, size_t nq, float r,
+                         int normal_filter, radius_ref *out)
+{
+    const float r2 = r * r;
+    size_t cap = 1024, len = 0;
+    out->start = malloc((nq + 1) * sizeof *out->start);
+    out->ids = malloc(cap * sizeof *out->ids);
+    out->r2 = calloc(nq ? nq : 1, sizeof *out->r2);
+    out->sr = calloc(nq ? nq : 1, sizeof *out->sr);
+    out->most = 0;
+    for (size_t q = 0; q < nq; ++q) {
+        out->start[q] = (uint32_t)len;
+        for (size_t i = 0; i < np && isfinite(qs[q].px) && isfinite(qs[q].py) && isfinite(qs[q].pz);
+             ++i) {
+            float dx = ph[i].px - qs[q].px, dy = ph[i].py - qs[q].py, dz = ph[i].pz - qs[q].pz;
+            float d2 = dx * dx + dy * dy + dz * dz;
+            if (!(d2 <= r2))
+                continue;
+            if (normal_filter &&
+                !(qs[q].nx * ph[i].dx + qs[q].ny * ph[i].dy + qs[q].nz * ph[i].dz < 0.0f))
+                continue;
+            if (len == cap) {
+                cap *= 2;
+                out->ids = realloc(out->ids, cap * sizeof *out->ids);
+            }
+            out->ids[len++] = (uint32_t)i;
+            out->r2[q] = fmaxf(out->r2[q], d2);
+            out->sr[q] += ph[i].pr;
+        }
+        uint32_t c = (uint32_t)len - out->start[q];
+        out->most = c > out->most ? c : out->most;
+    }
+    out->start[nq] = (uint32_t)len;
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* One radius search over the grid as it is built; the results and each
+ * query's index list sorted. */
+static int radius_search(fixture *fx, const char *name, sluice_stream *sp, sluice_stream *sq,
+                         size_t nq, sluice_stream *sr, sluice_stream *si, uint32_t cap, float r,
+                         int normal_filter, pm_knn_result *res, uint32_t *ind)
+{
+    pm_knn_options o = {1, r, PM_KNN_RADIUS, normal_filter, NULL, NULL, 0};
+    pm_knn_stats stats;
+    sluice_status s = pm_knn_query_indices(fx->knn, fx->grid, sp, sq, nq, sr, &o, si, cap, &stats);
+    CHECK(s == SLUICE_OK, "%s: query: %s", name, pm_knn_error(fx->knn));
+    if (s != SLUICE_OK)
+        return 0;
+    CHECK_OK(fx->ctx, sluice_stream_download(sr, res, nq, NULL));
+    CHECK_OK(fx->ctx, sluice_stream_download(si, ind, (size_t)cap * nq, NULL));
+    CHECK(stats.queries == nq && stats.passes >= 1, "%s: statistics", name);
+    for (size_t q = 0; q < nq; ++q)
+        qsort(ind + q * cap, res[q].count < cap ? res[q].count : cap, sizeof *ind, cmp_u32);
+    return 1;
+}
+
+/* Checks one search's results against the brute force: the same sorted
+ * photon lists, r2 the farthest one's bit for bit, the power summed. */
+static void radius_check(const char *name, const radius_ref *ref, size_t nq,
+                         const pm_knn_result *res, const uint32_t *ind, uint32_t cap)
+{
+    size_t bad = 0;
+    for (size_t q = 0; q < nq; ++q) {
+        uint32_t want = ref->start[q + 1] - ref->start[q];
+        int ok = res[q].count == want && (res[q].flags & PM_KNN_DONE) &&
+                 !(res[q].flags & PM_KNN_INDICES_CUT) && res[q].r2 == ref->r2[q] &&
+                 fabs(res[q].sr - ref->sr[q]) <= 1e-5 * ref->sr[q] + 1e-6;
+        ok = ok && (want == 0 ||
+                    memcmp(ind + q * cap, ref->ids + ref->start[q], want * sizeof *ind) == 0);
+        if (!ok && ++bad <= 5)
+            CHECK(0,
+                  "%s: query %zu: count %u (want %u) r2 %.9g (want %.9g) sr %g (want %g) flags %u",
+                  name, q, res[q].count, want, (double)res[q].r2, (double)ref->r2[q],
+                  (double)res[q].sr, ref->sr[q], res[q].flags);
+    }
+    CHECK(bad == 0, "%s: %zu of %zu queries differ from brute force", name, bad, nq);
+}
+
+/* Runs the radius search over the dense grid `dense` and the hashed layout
+ * `hash` (count and bitonic builds); checks both against brute force and
+ * FLANN, and that the two layouts find the same photons, bit for bit in
+ * count and r2. */
+static void radius_case(fixture *fx, const char *name, const rt_grid_desc *dense,
+                        const sr_point_hash_desc *hash, const pm_photon *ph, size_t np,
+                        const pm_query *qs, size_t nq, float r, int normal_filter)
+{
+    sluice_context *ctx = fx->ctx;
+    radius_ref ref;
+    radius_brute(ph, np, qs, nq, r, normal_filter, &ref);
+    uint32_t cap = ref.most ? ref.most : 1;
+    CHECK((size_t)cap * nq <= ((size_t)64 << 20), "%s: %u photons per query is too many to list",
+          name, cap);
+    sluice_stream *sp = NULL, *sq = NULL, *sr = NULL, *si = NULL;
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_photon), np ? np : 1, &sp));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_query), nq, &sq));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_knn_result), nq, &sr));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, (size_t)cap * nq, &si));
+    CHECK_OK(ctx, sluice_stream_upload(sp, ph, np));
+    CHECK_OK(ctx, sluice_stream_upload(sq, qs, nq));
+    pm_knn_result *res[3];
+    uint32_t *ind[3];
+    for (int i = 0; i < 3; ++i) {
+        res[i] = calloc(nq, sizeof **res);
+        ind[i] = calloc((size_t)cap * nq, sizeof **ind);
+    }
+    char full[160];
+    /* 0: dense (count build), 1: hashed (count), 2: hashed (bitonic) */
+    int have[3] = {0, 0, 0};
+    for (int v = 0; v < 3; ++v) {
+        sr_point_grid_build_kind kind = v == 2 ? SR_POINT_GRID_BITONIC : SR_POINT_GRID_COUNT;
+        sluice_status s =
+            v == 0 ? sr_point_grid_build(fx->grid, dense, sp, sizeof(pm_photon), np, kind, 0)
+                   : sr_point_grid_build_hashed(fx->grid, hash, sp, sizeof(pm_photon), np, kind);
+        snprintf(full, sizeof full, "%s/%s", name,
+                 v == 0 ? "dense" : (v == 1 ? "hash" : "hash bitonic"));
+        CHECK(s == SLUICE_OK, "%s: build: %s", full, sr_point_grid_error(fx->grid));
+        if (s != SLUICE_OK)
+            continue;
+        have[v] =
+            radius_search(fx, full, sp, sq, nq, sr, si, cap, r, normal_filter, res[v], ind[v]);
+        if (have[v])
+            radius_check(full, &ref, nq, res[v], ind[v], cap);
+    }
+    /* the layouts agree: the same photons, the same r2 (the same float
+     * distances); only the order of the power sums differs */
+    size_t differ = 0;
+    for (size_t q = 0; have[0] && have[1] && q < nq; ++q)
+        differ += res[0][q].count != res[1][q].count || res[0][q].r2 != res[1][q].r2 ||
+                  memcmp(ind[0] + q * cap, ind[1] + q * cap,
+                         (res[0][q].count < cap ? res[0][q].count : cap) * sizeof(uint32_t)) != 0;
+    CHECK(differ == 0, "%s: hash and dense differ on %zu queries", name, differ);
+    CHECK(!have[1] || !have[2] || memcmp(res[1], res[2], nq * sizeof **res) == 0,
+          "%s: the hashed count and bitonic builds differ", name);
+    /* FLANN, asked for d2 < nextafter(r^2): the kernel's d2 <= r^2 */
+    if (!normal_filter && np) {
+        flann_ref f;
+        flann_ref_init(&f, ph, np);
+        size_t bad = 0;
+        float r2 = nextafterf(r * r, INFINITY);
+        uint32_t *got = malloc((np + 1) * sizeof *got);
+        for (size_t q = 0; q < nq; ++q) {
+            if (!isfinite(qs[q].px) || !isfinite(qs[q].py) || !isfinite(qs[q].pz))
+                continue;
+            float qp[3] = {qs[q].px, qs[q].py, qs[q].pz};
+            int m = flann_radius_search_float(f.index, qp, f.idx, f.d, (int)np, r2, &f.params);
+            for (int j = 0; j < m; ++j)
+                got[j] = (uint32_t)f.idx[j];
+            qsort(got, (size_t)(m > 0 ? m : 0), sizeof *got, cmp_u32);
+            uint32_t want = ref.start[q + 1] - ref.start[q];
+            int ok = m == (int)want &&
+                     (want == 0 || memcmp(got, ref.ids + ref.start[q], want * sizeof *got) == 0);
+            if (!ok && ++bad <= 5)
+                CHECK(0, "%s: query %zu at (%g %g %g): FLANN finds %d photons, brute force %u",
+                      name, q, (double)qs[q].px, (double)qs[q].py, (double)qs[q].pz, m, want);
+        }
+        CHECK(bad == 0, "%s: %zu queries differ from FLANN's radius search", name, bad);
+        free(got);
+        flann_ref_free(&f);
+    }
+    for (int i = 0; i < 3; ++i) {
+        free(res[i]);
+        free(ind[i]);
+    }
+    radius_ref_free(&ref);
+    sluice_stream_destroy(sp);
+    sluice_stream_destroy(sq);
+    sluice_stream_destroy(sr);
+    sluice_stream_destroy(si);
+}
+
+/* radius_case with the automatic grids of sr_point_grid_plan_auto (the
+ * photon mapper's: dense cells for half the radius, hash cells of the
+ * radius) over the photons' bounds, or over [lo, hi] when given. */
+static void radius_case_auto(fixture *fx, const char *name, const pm_photon *ph, size_t np,
+                             const pm_query *qs, size_t nq, float r, int normal_filter,
+                             uint32_t buckets, int expect_hash)
+{
+    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (size_t i = 0; i < np; ++i) {
+        const float p[3] = {ph[i].px, ph[i].py, ph[i].pz};
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = i ? fminf(lo[a], p[a]) : p[a];
+            hi[a] = i ? fmaxf(hi[a], p[a]) : p[a];
+        }
+    }
+    sr_point_grid_plan plan;
+    char err[256];
+    sluice_status s = sr_point_grid_plan_auto(lo, hi, np, r / 2, r, SR_POINT_GRID_LAYOUT_AUTO,
+                                              &plan, err, sizeof err);
+    CHECK(s == SLUICE_OK, "%s: plan: %s", name, err);
+    if (s != SLUICE_OK)
+        return;
+    CHECK(expect_hash < 0 || (plan.layout == SR_POINT_GRID_HASHED) == expect_hash,
+          "%s: the plan chose %s: %s", name, plan.layout ? "hash" : "dense", plan.why);
+    if (buckets)
+        plan.hash.buckets = buckets;
+    radius_case(fx, name, &plan.dense, &plan.hash, ph, np, qs, nq, r, normal_filter);
+}
+
+static void test_radius(fixture *fx)
+{
+    uint32_t seed = 4711;
+    const size_t np_max = 20000, nq = 1500;
+    pm_photon *ph = malloc(np_max * sizeof *ph);
+    pm_query *qs = malloc(nq * sizeof *qs);
+
+    /* random photons, queries partly outside their box; with the normal
+     * filter; tables of 1, 2 and 8 buckets (every cell collides) */
+    for (size_t i = 0; i < np_max; ++i)
+        set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
+    random_queries(qs, nq, -0.2f, 1.2f, &seed);
+    radius_case_auto(fx, "radius random", ph, np_max, qs, nq, 0.05f, 0, 0, 1);
+    radius_case_auto(fx, "radius random, dense cells fit", ph, np_max, qs, nq, 0.1f, 0, 0, 0);
+    radius_case_auto(fx, "radius random, normal filter", ph, np_max, qs, nq, 0.05f, 1, 0, -1);
+    radius_case_auto(fx, "radius random, 1 bucket", ph, 4000, qs, 400, 0.05f, 0, 1, -1);
+    radius_case_auto(fx, "radius random, 2 buckets", ph, 4000, qs, 400, 0.05f, 0, 2, -1);
+    radius_case_auto(fx, "radius random, 8 buckets", ph, np_max, qs, nq, 0.03f, 0, 8, -1);
+    radius_case_auto(fx, "radius random, large radius", ph, 5000, qs, 300, 0.3f, 0, 0, -1);
+
+    /* empty; one photon (queries on it, at exactly r from it along an axis,
+     * just inside and outside) */
+    radius_case_auto(fx, "radius empty", ph, 0, qs, nq, 0.05f, 0, 0, -1);
+    set_photon(&ph[0], 0.5f, 0.25f, 0.75f, &seed);
+    for (size_t i = 0; i < 64; ++i) {
+        float off[4] = {0.0f, 0.125f, nextafterf(0.125f, 0.0f), nextafterf(0.125f, 1.0f)};
+        qs[i] = (pm_query){0.5f, 0.25f, 0.75f, 0, 1, 0, (uint32_t)i};
+        float *c = (i / 4) % 3 == 0 ? &qs[i].px : ((i / 4) % 3 == 1 ? &qs[i].py : &qs[i].pz);
+        *c += (i & 16 ? -1.0f : 1.0f) * off[i % 4];
+    }
+    radius_case_auto(fx, "radius one photon", ph, 1, qs, 64, 0.125f, 0, 0, -1);
+
+    /* all photons at one point, queries around it and on it */
+    for (size_t i = 0; i < 5000; ++i)
+        set_photon(&ph[i], 0.3f, 0.6f, 0.9f, &seed);
+    random_queries(qs, nq, 0.2f, 0.4f, &seed);
+    for (size_t i = 0; i < nq; ++i)
+        qs[i].py += 0.3f, qs[i].pz += 0.6f;
+    qs[0] = (pm_query){0.3f, 0.6f, 0.9f, 0, 1, 0, 0};
+    radius_case_auto(fx, "radius one point", ph, 5000, qs, nq, 0.04f, 0, 0, -1);
+
+    /* photons far apart in a huge box: four clusters at corners of a box
+     * 10^4 wide and scattered photons, radius 0.01; the dense grid is then
+     * capped and coarse, the hash keeps cells of the radius */
+    {
+        const float corner[4][3] = {{0, 0, 0}, {1e4f, 0, 0}, {0, 1e4f, 1e4f}, {1e4f, 1e4f, 1e4f}};
+        size_t n = 0;
+        for (int c = 0; c < 4; ++c)
+            for (int i = 0; i < 2000; ++i, ++n)
+                set_photon(&ph[n], corner[c][0] + 0.2f * frand(&seed),
+                           corner[c][1] + 0.2f * frand(&seed), corner[c][2] + 0.2f * frand(&seed),
+                           &seed);
+        for (int i = 0; i < 500; ++i, ++n)
+            set_photon(&ph[n], 1e4f * frand(&seed), 1e4f * frand(&seed), 1e4f * frand(&seed),
+                       &seed);
+        for (size_t i = 0; i < nq; ++i) {
+            const float *c = corner[i % 4];
+            qs[i] = (pm_query){c[0] + 0.24f * frand(&seed) - 0.02f,
+                               c[1] + 0.24f * frand(&seed) - 0.02f,
+                               c[2] + 0.24f * frand(&seed) - 0.02f,
+                               0,
+                               1,
+                               0,
+                               (uint32_t)i};
+        }
+        for (size_t i = 0; i < 100; ++i) /* on the scattered ones */
+            qs[i] = (pm_query){
+                ph[8000 + i].px + 0.005f, ph[8000 + i].py, ph[8000 + i].pz, 0, 1, 0, (uint32_t)i};
+        radius_case_auto(fx, "radius huge box", ph, n, qs, nq, 0.01f, 0, 0, 1);
+    }
+
+    /* ties on cell faces: a lattice of cells of 1/8 from 0, photons at
+     * every 1/16 (on faces, edges, corners and in between), queries on the
+     * same points and radius 1/8, so that distances of exactly r are
+     * common (binary fractions: no rounding) */
+    {
+        size_t n = 0;
+        for (int x = 0; x <= 16; ++x)
+            for (int y = 0; y <= 16; ++y)
+                for (int z = 0; z <= 4; ++z)
+                    set_photon(&ph[n++], (float)x / 16, (float)y / 16, (float)z / 16, &seed);
+        for (size_t i = 0; i < nq; ++i) {
+            const pm_photon *p = &ph[(i * 37) % n];
+            qs[i] = (pm_query){p->px, p->py, p->pz, 0, 1, 0, (uint32_t)i};
+        }
+        const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 0.25f};
+        rt_grid_desc d = desc_of(lo, hi, 8, 8, 2);
+        sr_point_hash_desc h = {{0.0f, 0.0f, 0.0f}, 0.125f, 64};
+        radius_case(fx, "radius faces", &d, &h, ph, n, qs, nq, 0.125f, 0);
+        h.buckets = 4;
+        radius_case(fx, "radius faces, 4 buckets", &d, &h, ph, n, qs, nq, 0.125f, 0);
+        /* a lattice of cells smaller than the radius: many cells per query */
+        h.cell = 0.03125f;
+        h.buckets = 1024;
+        radius_case(fx, "radius faces, fine lattice", &d, &h, ph, n, qs, 300, 0.125f, 0);
+    }
+
+    /* a query at NaN finds nothing on both layouts (brute force: none) */
+    for (size_t i = 0; i < 1000; ++i)
+        set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
+    random_queries(qs, 100, 0.0f, 1.0f, &seed);
+    qs[3].py = NAN;
+    radius_case_auto(fx, "radius NaN query", ph, 1000, qs, 100, 0.1f, 0, 0, -1);
+    free(ph);
+    free(qs);
+}
+
+/* What a hashed grid refuses, and its pass hook. */
+static unsigned hash_hook_calls;
+static sluice_status hash_hook(void *user, unsigned pass, size_t answered)
+{
+    (void)user;
+    CHECK(pass == 0 && answered == 4, "hashed pass hook: pass %u, %zu answered", pass, answered);
+    hash_hook_calls++;
+    return SLUICE_OK;
+}
+
+static void test_hash_errors(fixture *fx)
+{
+    sluice_context *ctx = fx->ctx;
+    sluice_stream *sp = NULL, *sq = NULL, *sr = NULL;
+    pm_photon ph[4] = {{0}};
+    pm_query qs[4] = {{0}};
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_photon), 4, &sp));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_query), 4, &sq));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_knn_result), 4, &sr));
+    CHECK_OK(ctx, sluice_stream_upload(sp, ph, 4));
+    CHECK_OK(ctx, sluice_stream_upload(sq, qs, 4));
+    sr_point_hash_desc h = {{0, 0, 0}, 0.5f, 16};
+    CHECK_OK(ctx, sr_point_grid_build_hashed(fx->grid, &h, sp, sizeof(pm_photon), 4,
+                                             SR_POINT_GRID_COUNT));
+    pm_knn_options o = {8, 1.0f, PM_KNN_ATLEAST, 0, NULL, NULL, 0};
+    for (int m = 0; m < 2; ++m) {
+        o.mode = (pm_knn_mode)m;
+        CHECK(pm_knn_query(fx->knn, fx->grid, sp, sq, 4, sr, &o, NULL) ==
+                      SLUICE_ERROR_INVALID_ARGUMENT &&
+                  strstr(pm_knn_error(fx->knn), "hashed"),
+              "mode %d over a hashed grid: %s", m, pm_knn_error(fx->knn));
+    }
+    o.mode = PM_KNN_RADIUS;
+    o.max_radius = INFINITY;
+    CHECK(pm_knn_query(fx->knn, fx->grid, sp, sq, 4, sr, &o, NULL) == SLUICE_ERROR_INVALID_ARGUMENT,
+          "an infinite radius over a hashed grid");
+    o.max_radius = 1.0f;
+    o.on_pass = hash_hook;
+    pm_knn_stats st;
+    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, 4, sr, &o, &st));
+    CHECK(hash_hook_calls == 1 && st.passes == 1 && st.queries == 4 && st.mean_count == 4.0,
+          "hashed: %u hook calls, %u passes, %.1f photons per query", hash_hook_calls, st.passes,
+          st.mean_count);
+    sluice_stream_destroy(sp);
+    sluice_stream_destroy(sq);
+    sluice_stream_destroy(sr);
+}
+
 /* Exact mode in batches (k large enough that the heaps of all queries do
  * not fit PM_KNN_EXACT_HEAP_BYTES), and the normal filter. */
 static void test_batches_and_filter(fixture *fx)
@@ -637,6 +1024,8 @@ int main(void)
     CHECK_OK(fx.ctx, pm_knn_create(fx.ctx, &fx.knn));
     if (fx.grid && fx.knn) {
         test_errors(&fx);
+        test_hash_errors(&fx);
+        test_radius(&fx);
         test_batches_and_filter(&fx);
         test_pass_hook(&fx);
         test_cases(&fx);

@@ -1,6 +1,7 @@
 /*
  * The photon mapper (apps/photonmap): photon tracing, the three photon-map
- * builds giving the same image, determinism, and (with --cli PATH) the
+ * builds giving the same image, determinism, the hashed photon map against
+ * the dense one on a scene with a huge photon box, and (with --cli PATH) the
  * command line. The furnaces are test_stress's.
  * Prints "N passed, N failed".
  */
@@ -119,6 +120,147 @@ static void test_builds_agree(void)
     sr_scene_destroy(s);
 }
 
+/* Renders `spp` progressive samples of `scene` at w x h; the image's pixels
+ * (malloc'ed, or NULL on failure) and the statistics. */
+static float *render_ppm(const sr_scene *scene, pm_options o, unsigned w, unsigned h, unsigned spp,
+                         pm_stats *stats)
+{
+    char err[1024] = "";
+    o.width = w;
+    o.height = h;
+    o.progressive = 1;
+    pm_renderer *r = NULL;
+    sr_image *img = NULL;
+    float *px = NULL;
+    sluice_status st = pm_renderer_create(ctx, scene, &o, &r, err, sizeof err);
+    CHECK(st == SLUICE_OK, "pm_renderer_create: %s", err);
+    for (unsigned i = 0; st == SLUICE_OK && i < spp; ++i)
+        st = pm_renderer_sample(r, err, sizeof err);
+    CHECK(st == SLUICE_OK, "pm_renderer_sample: %s", err);
+    if (st == SLUICE_OK)
+        st = sr_image_create(w, h, 3, &img, err, sizeof err);
+    size_t bad = 1;
+    if (st == SLUICE_OK)
+        st = sr_film_resolve(pm_renderer_film(r), 1.0 / spp, img, &bad);
+    CHECK(st == SLUICE_OK && bad == 0, "image: %zu non-finite pixels", bad);
+    if (st == SLUICE_OK) {
+        px = malloc((size_t)w * h * 3 * sizeof *px);
+        if (px)
+            memcpy(px, sr_image_pixels(img), (size_t)w * h * 3 * sizeof *px);
+        *stats = *pm_renderer_stats(r);
+    }
+    sr_image_destroy(img);
+    pm_renderer_destroy(r);
+    return px;
+}
+
+/* The hashed photon map (Purcell 6.4.4) end to end, on
+ * scenes/distant-wall.json: a small room whose photons' box a wall 500
+ * units away stretches to thousands of search radii. The progressive
+ * radius search finds the same photons over the hash as over the dense grid
+ * (test_knn checks that photon by photon), so the images agree up to the
+ * order in which each estimate's power is summed: float rounding, far below
+ * the noise of one sample. Also: auto takes the hash there and the dense
+ * grid where it fits or for Purcell's k-nearest search; the same seed gives
+ * the same image; the hash is refused where it cannot serve. */
+static void test_hashed_map(void)
+{
+    char err[1024] = "";
+    sr_scene_load_options lo;
+    memset(&lo, 0, sizeof lo);
+    sr_scene *s = NULL;
+    sluice_status st = sr_scene_load(PM_SCENES_DIR "/distant-wall.json", &lo, &s, err, sizeof err);
+    CHECK(st == SLUICE_OK, "distant-wall.json: %s", err);
+    if (!s)
+        return;
+    const unsigned w = 64, h = 48, spp = 3;
+    pm_options o = pm_options_default();
+    o.photons = 4000;
+    o.k = 32;
+    o.max_radius = 0.15f;
+    o.max_depth = 5;
+    pm_stats sd, sh, sa, sh2;
+    o.photon_grid = SR_POINT_GRID_DENSE;
+    float *dense = render_ppm(s, o, w, h, spp, &sd);
+    o.photon_grid = SR_POINT_GRID_HASHED;
+    float *hash = render_ppm(s, o, w, h, spp, &sh);
+    float *again = render_ppm(s, o, w, h, spp, &sh2);
+    o.photon_grid = SR_POINT_GRID_LAYOUT_AUTO;
+    float *autom = render_ppm(s, o, w, h, spp, &sa);
+    CHECK(sd.maps_dense == spp && sd.maps_hashed == 0 && sd.map_layout == SR_POINT_GRID_DENSE,
+          "dense asked for: %u dense, %u hashed maps", sd.maps_dense, sd.maps_hashed);
+    CHECK(sh.maps_hashed == spp && sh.maps_dense == 0 && sh.map_layout == SR_POINT_GRID_HASHED &&
+              sh.map_hash.buckets >= 2 * 4000 && sh.map_hash.cell == sh.max_radius,
+          "hash asked for: %u dense, %u hashed maps, %u buckets, cell %g (radius %g)",
+          sh.maps_dense, sh.maps_hashed, sh.map_hash.buckets, (double)sh.map_hash.cell,
+          (double)sh.max_radius);
+    CHECK(sa.maps_hashed == spp && strstr(sa.map_why, "coarser"),
+          "auto on a huge photon box: %u hashed maps: %s", sa.maps_hashed, sa.map_why);
+    CHECK(sd.found == sh.found && sd.found > 1000 && sd.queries == sh.queries,
+          "the layouts find %llu and %llu photons", (unsigned long long)sd.found,
+          (unsigned long long)sh.found);
+    size_t differ = 0, n = (size_t)w * h * 3;
+    double worst = 0.0, mean = 0.0;
+    for (size_t i = 0; dense && hash && i < n; ++i) {
+        double d = fabs((double)dense[i] - (double)hash[i]);
+        worst = fmax(worst, d);
+        mean += dense[i] / (double)n;
+        differ += d > 1e-5 * fabs((double)dense[i]) + 1e-7;
+    }
+    CHECK(dense && hash && differ == 0,
+          "hash and dense images differ beyond rounding in %zu values (largest %g, mean value %g)",
+          differ, worst, mean);
+    CHECK(hash && again && !memcmp(hash, again, n * sizeof *hash), "hash: same seed, other image");
+    CHECK(autom && hash && !memcmp(hash, autom, n * sizeof *hash), "auto: not the hash's image");
+    free(dense);
+    free(hash);
+    free(again);
+    free(autom);
+
+    /* auto keeps the dense grid where its cells fit (cornell), and for the
+     * k-nearest search */
+    sr_scene *c = builtin("cornell");
+    if (c) {
+        pm_options oc = pm_options_default();
+        oc.photons = 2000;
+        oc.k = 32;
+        oc.light_samples = 1;
+        pm_stats sc;
+        float *img = render_ppm(c, oc, 32, 32, 1, &sc);
+        CHECK(sc.maps_dense == 1 && strstr(sc.map_why, "dense"), "cornell, auto: %s", sc.map_why);
+        free(img);
+        img = render(c, oc, 32, 32, &sc);
+        CHECK(sc.maps_dense == 1 && strstr(sc.map_why, "k-nearest"), "cornell, kNN: %s",
+              sc.map_why);
+        free(img);
+        sr_scene_destroy(c);
+    }
+
+    /* the hash where it cannot serve */
+    struct {
+        int progressive;
+        uint32_t dims;
+        sr_point_grid_build_kind map;
+        const char *why;
+    } bad[] = {{0, 0, SR_POINT_GRID_COUNT, "k-nearest"},
+               {1, 16, SR_POINT_GRID_COUNT, "--grid"},
+               {1, 0, SR_POINT_GRID_STENCIL, "stencil"}};
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; ++i) {
+        pm_options ob = o;
+        ob.photon_grid = SR_POINT_GRID_HASHED;
+        ob.progressive = bad[i].progressive;
+        ob.grid_dims[0] = ob.grid_dims[1] = ob.grid_dims[2] = bad[i].dims;
+        ob.map = bad[i].map;
+        pm_renderer *r = NULL;
+        err[0] = '\0';
+        st = pm_renderer_create(ctx, s, &ob, &r, err, sizeof err);
+        CHECK(st == SLUICE_ERROR_INVALID_ARGUMENT && !r && strstr(err, bad[i].why),
+              "hash refused (%s): %s", bad[i].why, err);
+        pm_renderer_destroy(r);
+    }
+    sr_scene_destroy(s);
+}
+
 /* Intermediate images (Purcell 6.3.4): one per kNN pass; the last one is
  * the final image; they do not change the image; a failing callback stops
  * the render with its status and message. */
@@ -209,6 +351,10 @@ static void test_cli(const char *exe)
         {"--min-spp 5", "--min-spp"},
         {"--alpha 0", "--alpha"},
         {"--progressive --alpha", "--alpha"},
+        {"--photon-grid sparse", "--photon-grid"},
+        {"--photon-grid hash", "--progressive"},
+        {"--progressive --photon-grid hash --grid 10x10x10", "--grid"},
+        {"--progressive --photon-grid hash --map stencil", "stencil"},
         {"--frobnicate 1", "--frobnicate"},
         {"--scene no-such-scene.obj", "no-such-scene.obj"},
     };
@@ -219,7 +365,8 @@ static void test_cli(const char *exe)
               out);
     }
     snprintf(cmd, sizeof cmd, "%s --help", exe);
-    CHECK(check_run(cmd, out, sizeof out) == 0 && strstr(out, "--map") && strstr(out, "examples"),
+    CHECK(check_run(cmd, out, sizeof out) == 0 && strstr(out, "--map") && strstr(out, "examples") &&
+              strstr(out, "--photon-grid dense|hash|auto"),
           "--help");
     snprintf(cmd, sizeof cmd,
              "%s --scene glassball --size 64x48 --photons 2000 --map bitonic --out pm_cli.png "
@@ -245,6 +392,11 @@ static void test_cli(const char *exe)
     out[n] = '\0';
     if (f)
         fclose(f);
+    const char *ml = strstr(out, "\"map_layout\": {\"last\": \"");
+    unsigned nd = 0, nh = 0;
+    CHECK(ml && sscanf(ml + 24, "%*[a-z]\", \"dense\": %u, \"hash\": %u", &nd, &nh) == 2 &&
+              nd + nh == 4 && strstr(ml, "\"why\": \""),
+          "progressive: the layout of 4 maps (%u dense, %u hashed): %s", nd, nh, out);
     const char *pr = strstr(out, "\"progressive\"");
     double a = 0, r0 = 0, r3 = 0;
     CHECK(pr &&
@@ -295,6 +447,7 @@ int main(int argc, char **argv)
     } else {
         test_builds_agree();
         test_pass_images();
+        test_hashed_map();
     }
     sluice_context_destroy(ctx);
     return check_summary();

@@ -18,7 +18,11 @@
  * The per-query state between passes is the result record itself (sums,
  * count, r^2, shells, flags) and, in exact mode, the heap. Atleast mode runs
  * all queries in one batch; exact mode in batches whose heaps fit
- * PM_KNN_EXACT_HEAP_BYTES. */
+ * PM_KNN_EXACT_HEAP_BYTES.
+ *
+ * A hashed grid (Purcell 6.4.4; radius mode only) shares the gather and the
+ * bounds (buckets for cells) and then needs no summed counts and no loop:
+ * pm_knn_hash answers every query in one launch, one pass. */
 #include "knn.h"
 
 #include "app_error.h"
@@ -54,7 +58,7 @@ enum {
 struct pm_knn {
     sluice_context *ctx;
     sluice_program *prog;
-    sluice_kernel *k_gather, *k_bounds, *k_sat[3], *k_init, *k_pass, *k_live;
+    sluice_kernel *k_gather, *k_bounds, *k_sat[3], *k_init, *k_pass, *k_live, *k_hash;
     sluice_loop *loop;
     /* scratch kept between calls; streams only grow */
     sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
@@ -117,6 +121,7 @@ void pm_knn_destroy(pm_knn *knn)
     sluice_kernel_destroy(knn->k_init);
     sluice_kernel_destroy(knn->k_pass);
     sluice_kernel_destroy(knn->k_live);
+    sluice_kernel_destroy(knn->k_hash);
     sluice_program_destroy(knn->prog);
     sluice_stream_destroy(knn->live);
     sluice_stream_destroy(knn->next);
@@ -159,6 +164,8 @@ sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out)
         st = sluice_kernel_create(knn->prog, "pm_knn_pass", &knn->k_pass);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(knn->prog, "pm_knn_live", &knn->k_live);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_hash", &knn->k_hash);
     if (st == SLUICE_OK)
         st = sluice_stream_create(ctx, 4, 1, &knn->live);
     if (st == SLUICE_OK)
@@ -232,7 +239,13 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
 {
     memset(g, 0, sizeof *g);
     memset(p, 0, sizeof *p);
-    for (int a = 0; a < 3; ++a) {
+    for (int a = 0; a < 3 && v->layout == SR_POINT_GRID_HASHED; ++a) {
+        /* only pm_box_d2 reads it there (a bound that holds without it:
+         * the box's faces are photons' own coordinates) */
+        double mag = fabs((double)v->hash.lo[a]);
+        p->margin[a] = (float)((double)v->hash.cell * 0x1p-12 + mag * 0x1p-20);
+    }
+    for (int a = 0; a < 3 && v->layout == SR_POINT_GRID_DENSE; ++a) {
         g->lo[a] = v->desc.lo[a];
         g->cell[a] = v->desc.cell[a];
         g->inv_cell[a] = 1.0f / v->desc.cell[a];
@@ -242,7 +255,7 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
             (float)((double)v->desc.cell[a] * ((double)v->desc.dims[a] * 0x1p-20 + 0x1p-12) +
                     mag * 0x1p-20);
     }
-    g->cells = v->cells;
+    g->cells = v->layout == SR_POINT_GRID_DENSE ? v->cells : 0u;
     g->stride = sizeof(pm_photon) / 4;
     g->slots = v->slots;
     /* radius mode: the at-least search never full, so every photon within
@@ -255,6 +268,101 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
     p->shells_per_pass = o->shells_per_pass == PM_KNN_ALL_SHELLS
                              ? 0u
                              : (o->shells_per_pass ? o->shells_per_pass : 1u);
+}
+
+/* Reads the results back into the statistics' means and counts. */
+static sluice_status results_stats(pm_knn *knn, sluice_stream *results, size_t n,
+                                   pm_knn_stats *stats)
+{
+    pm_knn_result *r = malloc((n ? n : 1) * sizeof *r);
+    if (!r)
+        return FAIL(knn, SLUICE_ERROR_OUT_OF_MEMORY, "kNN: statistics: out of host memory");
+    sluice_status st = sluice_stream_download(results, r, n, NULL);
+    double sum_count = 0.0, sum_radius = 0.0;
+    size_t with = 0;
+    for (size_t i = 0; st == SLUICE_OK && i < n; ++i) {
+        sum_count += r[i].count;
+        if (r[i].count) {
+            sum_radius += sqrt((double)r[i].r2);
+            ++with;
+        } else {
+            stats->empty++;
+        }
+        if (r[i].flags & PM_KNN_HIT_MAX_RADIUS)
+            stats->hit_max_radius++;
+    }
+    free(r);
+    if (st != SLUICE_OK)
+        return FAIL(knn, st, "kNN: statistics: %s", sluice_context_error(knn->ctx));
+    stats->queries = n;
+    stats->mean_count = n ? sum_count / (double)n : 0.0;
+    stats->mean_radius = with ? sum_radius / (double)with : 0.0;
+    return SLUICE_OK;
+}
+
+/* The radius search over a hashed grid (the map already gathered): one
+ * launch of pm_knn_hash, one pass. */
+static sluice_status query_hashed(pm_knn *knn, const sr_point_grid_view *v,
+                                  sluice_stream *map_start, sluice_stream *queries, size_t n,
+                                  sluice_stream *results, const pm_knn_options *o,
+                                  const pm_knn_params *p, sluice_stream *indices, uint32_t cap,
+                                  pm_knn_stats *stats, double t0)
+{
+    pg_hash_params h;
+    memset(&h, 0, sizeof h);
+    for (int a = 0; a < 3; ++a)
+        h.lo[a] = v->hash.lo[a];
+    h.cell = v->hash.cell;
+    h.inv_cell = 1.0f / v->hash.cell;
+    h.mask = v->hash.buckets - 1u;
+    h.buckets = v->hash.buckets;
+    h.stride = sizeof(pm_photon) / 4;
+    sluice_kernel *k = knn->k_hash;
+    sluice_status st = sluice_kernel_set_stream(k, 0, queries, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 1, knn->map, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 2, map_start, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 3, v->cell_count, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 4, sizeof h, &h);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 5, sizeof *p, p);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 6, results, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 7, indices ? indices : knn->dummy, 0);
+    /* the length first: a pass hook may read the results */
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(results, n);
+    if (st == SLUICE_OK && n)
+        st = sluice_kernel_launch_count(k, n);
+    if (st == SLUICE_OK && indices)
+        st = sluice_stream_set_length(indices, n * cap);
+    if (st == SLUICE_OK)
+        st = sluice_context_finish(knn->ctx);
+    if (st != SLUICE_OK) {
+        if (st == SLUICE_ERROR_OUT_OF_MEMORY && !*sluice_context_error(knn->ctx))
+            return FAIL(knn, st, "kNN: searching the hashed grid: out of memory");
+        return FAIL(knn, st, "kNN: searching the hashed grid: %s", sluice_context_error(knn->ctx));
+    }
+    /* one pass: the hook sees every result final */
+    if (o->on_pass) {
+        st = o->on_pass(o->on_pass_user, 0, n);
+        if (st != SLUICE_OK)
+            return FAIL(knn, st, "kNN: the pass hook failed (%s)", sluice_status_string(st));
+    }
+    if (stats) {
+        stats->passes = 1;
+        stats->batches = 1;
+        if (n)
+            st = results_stats(knn, results, n, stats);
+        if (st != SLUICE_OK)
+            return st;
+        stats->seconds = now() - t0;
+    }
+    return SLUICE_OK;
 }
 
 static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,
@@ -282,6 +390,14 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     sluice_status st = sr_point_grid_get(grid, &v);
     if (st != SLUICE_OK || !v.order || !v.cells)
         return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT, "kNN: the point grid is not built");
+    const int hashed = v.layout == SR_POINT_GRID_HASHED;
+    if (hashed && o->mode != PM_KNN_RADIUS)
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT,
+                    "kNN: a hashed point grid answers the radius search only (the k-nearest "
+                    "searches need the dense grid)");
+    if (hashed && !isfinite(o->max_radius))
+        return FAIL(knn, SLUICE_ERROR_INVALID_ARGUMENT,
+                    "kNN: the radius search over a hashed point grid needs a finite radius");
     st = check_stream(knn, photons, "photon", sizeof(pm_photon), v.points, 1);
     if (st == SLUICE_OK)
         st = check_stream(knn, queries, "query", sizeof(pm_query), n, 1);
@@ -369,12 +485,16 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st != SLUICE_OK)
         goto runtime_fail;
 
-    step = "summing the cell counts";
     pg_params g;
     pm_knn_params p;
     params_make(&v, o, indices ? cap : 0u, stride32, &g, &p);
     memcpy(p.box_lo, box, sizeof p.box_lo);
     memcpy(p.box_hi, box + 3, sizeof p.box_hi);
+    if (hashed)
+        return query_hashed(knn, &v, map_start, queries, n, results, o, &p, indices, cap, stats,
+                            t0);
+
+    step = "summing the cell counts";
     st = ensure(knn->ctx, &knn->sat, 4, v.cells);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(knn->k_sat[0], 0, v.cell_count, 0);
@@ -476,29 +596,9 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st != SLUICE_OK)
         goto runtime_fail;
     if (stats && n) {
-        pm_knn_result *r = malloc(n * sizeof *r);
-        if (!r)
-            return FAIL(knn, SLUICE_ERROR_OUT_OF_MEMORY, "kNN: statistics: out of host memory");
-        st = sluice_stream_download(results, r, n, NULL);
-        double sum_count = 0.0, sum_radius = 0.0;
-        size_t with = 0;
-        for (size_t i = 0; st == SLUICE_OK && i < n; ++i) {
-            sum_count += r[i].count;
-            if (r[i].count) {
-                sum_radius += sqrt((double)r[i].r2);
-                ++with;
-            } else {
-                stats->empty++;
-            }
-            if (r[i].flags & PM_KNN_HIT_MAX_RADIUS)
-                stats->hit_max_radius++;
-        }
-        free(r);
+        st = results_stats(knn, results, n, stats);
         if (st != SLUICE_OK)
-            goto runtime_fail;
-        stats->queries = n;
-        stats->mean_count = sum_count / (double)n;
-        stats->mean_radius = with ? sum_radius / (double)with : 0.0;
+            return st;
     }
     if (stats)
         stats->seconds = now() - t0;

@@ -27,6 +27,18 @@
  *                   The heaps take 8 k bytes per query; queries run in
  *                   batches of at most PM_KNN_EXACT_HEAP_BYTES of heaps.
  *
+ * A hashed point grid (sr_point_grid_build_hashed; Purcell 6.4.4) serves
+ * the radius mode only: each query looks up, in one pass, the lattice cells
+ * its sphere overlaps (about 3 across each axis with cells of the radius,
+ * as sr_point_hash_desc_auto makes them; cells much finer than the radius
+ * make many lookups) and skips the photons of other cells that share a
+ * bucket. It finds exactly the photons the dense grid's radius mode finds
+ * (the same distance test, the same r2; only the order of the power sums
+ * differs). The k-nearest modes need the dense grid: their radius is not
+ * known before the search, so no cell size can be chosen for it, and their
+ * shells are bounded and jumped over by the dense grid's summed counts,
+ * which a table of buckets has no counterpart of.
+ *
  * Photons are pm_photon records (kernels/photonmap/pm_types.h); the grid
  * must have been built over that stream (stride 40). Each photon's power is
  * scaled by its cell's arrived / stored count, Purcell's power
@@ -120,10 +132,14 @@ void pm_knn_destroy(pm_knn *knn);
  * the photons of `photons` (pm_photon records, the stream `grid` was last
  * built over) into results[0 .. n) (pm_knn_result records; capacity >= n;
  * length set to n). Waits for the answer. `stats` may be NULL (otherwise the
- * results are read back to fill it). Errors: SLUICE_ERROR_INVALID_ARGUMENT
- * for NULL arguments, wrong record sizes, n above a stream's length or the
- * results' capacity, a grid not built or built over fewer photons than it
- * lists, bad options; the runtime's errors otherwise. pm_knn_error says
+ * results are read back to fill it). Over a hashed grid the search is one
+ * pass (on_pass is called once, with every result final), each result's
+ * `shells` holds the cells it looked up, and its flags are PM_KNN_DONE |
+ * PM_KNN_HIT_MAX_RADIUS. Errors: SLUICE_ERROR_INVALID_ARGUMENT for NULL
+ * arguments, wrong record sizes, n above a stream's length or the results'
+ * capacity, a grid not built or built over fewer photons than it lists, bad
+ * options, a hashed grid with a mode other than PM_KNN_RADIUS or an
+ * infinite max_radius; the runtime's errors otherwise. pm_knn_error says
  * why.
  */
 sluice_status pm_knn_query(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,

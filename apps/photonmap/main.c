@@ -53,6 +53,17 @@ static void usage(FILE *out)
           "                           --max-radius, or between the radius of k photons\n"
           "                           around the photons and spread evenly\n"
           "  --alpha A                progressive radius reduction, 0 < A < 1 (default 2/3)\n"
+          "  --photon-grid dense|hash|auto\n"
+          "                           the photon map's layout (default auto): a dense grid\n"
+          "                           (a record per cell of the photons' box), or cells of\n"
+          "                           the search radius hashed into a table of 2 to 4\n"
+          "                           buckets per photon (Purcell 6.4.4); hash needs\n"
+          "                           --progressive (only its radius search reads it), the\n"
+          "                           count or bitonic build and no --grid; auto takes it\n"
+          "                           there when a dense grid's cells, at most 4 per\n"
+          "                           photon, would come out coarser than wanted (a box far\n"
+          "                           larger than the radius: a small lit object and a\n"
+          "                           distant wall); the statistics say which and why\n"
           "  --pass-images FILE       also write the image after every kNN pass, the\n"
           "                           estimates as they stand (Purcell 6.3.4): FILE with\n"
           "                           -0000, -0001, ... before its extension (.png, .exr,\n"
@@ -63,7 +74,8 @@ static void usage(FILE *out)
           "  " PROG " --scene ring --map stencil --grid 250x1x250 --stats ring.json\n"
           "  " PROG " --scene cornell --photons 65000 --k 500 --grid 25x25x50 --light-samples 32\n"
           "  " PROG " --scene glassball --pass-images frames/glassball.png\n"
-          "  " PROG " --scene glassball --progressive --spp 64 --out glassball-ppm.png\n",
+          "  " PROG " --scene glassball --progressive --spp 64 --out glassball-ppm.png\n"
+          "  " PROG " --scene scenes/distant-wall.json --progressive --max-radius 0.15 --spp 16\n",
           out);
 }
 
@@ -73,6 +85,7 @@ typedef struct cli {
     unsigned spp;
     const char *pass_images; /* --pass-images pattern, or NULL */
     int have_spp, have_photons, have_k, have_ls, have_depth;
+    int have_grid; /* --grid WxHxD (not auto) */
 } cli;
 
 static int parse(int argc, char **argv, cli *c)
@@ -129,11 +142,13 @@ static int parse(int argc, char **argv, cli *c)
             int n = 0;
             if (!strcmp(v, "auto")) {
                 memset(c->opt.grid_dims, 0, sizeof c->opt.grid_dims);
+                c->have_grid = 0;
             } else if (sscanf(v, "%u%c%u%c%u%n", &d[0], &x1, &d[1], &x2, &d[2], &n) == 5 &&
                        (size_t)n == strlen(v) && x1 == 'x' && x2 == 'x' && v[0] != '-' && d[0] &&
                        d[1] && d[2] && d[0] <= 4096 && d[1] <= 4096 && d[2] <= 4096 &&
                        (unsigned long long)d[0] * d[1] * d[2] <= (1u << 26)) {
                 memcpy(c->opt.grid_dims, d, sizeof d);
+                c->have_grid = 1;
             } else {
                 return sr_cli_bad(PROG, a, v,
                                   "expected auto or WxHxD (1 .. 4096 each, at most 2^26 cells)");
@@ -168,6 +183,12 @@ static int parse(int argc, char **argv, cli *c)
             if (!sr_cli_double(v, 1e-6, 1.0 - 1e-6, &al))
                 return sr_cli_bad(PROG, a, v, "expected a number between 0 and 1");
             c->opt.alpha = (float)al;
+        } else if (!strcmp(a, "--photon-grid")) {
+            if ((k = sr_cli_choice(v, (const char *const[]){"dense", "hash", "auto", NULL})) < 0)
+                return sr_cli_bad(PROG, a, v, "expected dense, hash or auto");
+            c->opt.photon_grid = k == 0   ? SR_POINT_GRID_DENSE
+                                 : k == 1 ? SR_POINT_GRID_HASHED
+                                          : SR_POINT_GRID_LAYOUT_AUTO;
         } else if (!strcmp(a, "--pass-images")) {
             if ((k = sr_cli_image_path(PROG, a, v)) != 0)
                 return k;
@@ -175,6 +196,19 @@ static int parse(int argc, char **argv, cli *c)
         } else {
             return sr_cli_bad(PROG, a, NULL, "unknown option");
         }
+    }
+    if (c->opt.photon_grid == SR_POINT_GRID_HASHED) {
+        /* only the progressive radius search reads a hashed map, and only
+         * the compact builds list a bucket whole (Purcell 6.4.4) */
+        if (!c->opt.progressive)
+            return sr_cli_bad(PROG, "--photon-grid", "hash",
+                              "needs --progressive (the k-nearest searches need the dense grid)");
+        if (c->have_grid)
+            return sr_cli_bad(PROG, "--photon-grid", "hash",
+                              "cannot take --grid WxHxD (the dimensions of a dense grid)");
+        if (c->opt.map == SR_POINT_GRID_STENCIL)
+            return sr_cli_bad(PROG, "--photon-grid", "hash",
+                              "cannot take --map stencil (its power redistribution is per cell)");
     }
     return sr_cli_common_finish(PROG, &c->common);
 }
@@ -268,11 +302,20 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
                 (unsigned long long)p->caustic, (unsigned long long)p->left_scene,
                 (unsigned long long)p->absorbed, (unsigned long long)p->depth_limit, p->passes,
                 p->batches);
-        fprintf(f,
-                "photon map: grid %ux%ux%u, occupied cells %zu, per cell max %u mean %.1f, "
-                "stencil overflow %zu photons in %zu cells\n",
-                g->dims[0], g->dims[1], g->dims[2], m->occupied_cells, m->max_per_cell,
-                m->mean_per_occupied, m->overflow_points, m->overfull_cells);
+        if (s->map_layout == SR_POINT_GRID_HASHED)
+            fprintf(f,
+                    "photon map: hash grid, cells %.4g, %u buckets, occupied buckets %zu, per "
+                    "bucket max %u mean %.1f\n",
+                    (double)s->map_hash.cell, s->map_hash.buckets, m->occupied_cells,
+                    m->max_per_cell, m->mean_per_occupied);
+        else
+            fprintf(f,
+                    "photon map: grid %ux%ux%u, occupied cells %zu, per cell max %u mean %.1f, "
+                    "stencil overflow %zu photons in %zu cells\n",
+                    g->dims[0], g->dims[1], g->dims[2], m->occupied_cells, m->max_per_cell,
+                    m->mean_per_occupied, m->overflow_points, m->overfull_cells);
+        fprintf(f, "photon map layout: dense %u, hash %u of %u maps; the last one %s\n",
+                s->maps_dense, s->maps_hashed, s->maps_dense + s->maps_hashed, s->map_why);
         fprintf(f,
                 "estimates: %llu, photons per estimate %.1f, mean radius %.4g, at max radius "
                 "%llu, kNN passes per sample %u, live after pass:",
@@ -334,6 +377,12 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
             "\"overfull_cells\": %zu},\n",
             g->dims[0], g->dims[1], g->dims[2], m->cells, m->occupied_cells, m->max_per_cell,
             m->mean_per_occupied, m->overflow_points, m->overfull_cells);
+    /* the why strings hold no quotes or backslashes */
+    fprintf(f,
+            "  \"map_layout\": {\"last\": \"%s\", \"dense\": %u, \"hash\": %u, "
+            "\"hash_cell\": %g, \"hash_buckets\": %u, \"why\": \"%s\"},\n",
+            s->map_layout == SR_POINT_GRID_HASHED ? "hash" : "dense", s->maps_dense, s->maps_hashed,
+            (double)s->map_hash.cell, s->map_hash.buckets, s->map_why);
     fprintf(f,
             "  \"estimates\": {\"count\": %llu, \"mean_photons\": %.3f, \"mean_radius\": %.6g, "
             "\"hit_max_radius\": %llu, \"passes\": %u, \"live_per_pass\": [",

@@ -65,6 +65,7 @@ pm_options pm_options_default(void)
     o.shells_per_pass = 1;
     o.tracer = rt_tracer_options_default();
     o.alpha = 2.0f / 3.0f;
+    o.photon_grid = SR_POINT_GRID_LAYOUT_AUTO;
     return o;
 }
 
@@ -181,9 +182,25 @@ sluice_status pm_renderer_create(sluice_context *ctx, const sr_scene *scene, con
         *out = NULL;
     if (!ctx || !scene || !opt || !out || opt->k == 0 || opt->k > PM_KNN_MAX_K ||
         !(opt->max_radius >= 0) || (unsigned)opt->map > (unsigned)SR_POINT_GRID_STENCIL ||
-        opt->slots == 0 || opt->slots > SR_POINT_GRID_MAX_SLOTS) {
+        opt->slots == 0 || opt->slots > SR_POINT_GRID_MAX_SLOTS ||
+        (unsigned)opt->photon_grid > (unsigned)SR_POINT_GRID_LAYOUT_AUTO) {
         sr_set_error(err, err_size, "photon mapper: bad options");
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    if (opt->photon_grid == SR_POINT_GRID_HASHED) {
+        /* only the radius search reads buckets that mix cells, and only the
+         * compact builds list a bucket's photons whole (Purcell 6.4.4) */
+        const char *why = !opt->progressive   ? "the k-nearest searches need the dense grid (use "
+                                                "--progressive, whose radius search reads a hash)"
+                          : opt->grid_dims[0] ? "--grid sets a dense grid's dimensions"
+                          : opt->map == SR_POINT_GRID_STENCIL
+                              ? "the stencil build's power redistribution is per cell, and a "
+                                "bucket mixes cells"
+                              : NULL;
+        if (why) {
+            sr_set_error(err, err_size, "photon mapper: no hashed photon map here: %s", why);
+            return SLUICE_ERROR_INVALID_ARGUMENT;
+        }
     }
     pm_renderer *r = calloc(1, sizeof *r);
     if (!r) {
@@ -281,34 +298,62 @@ static sluice_status photon_bounds(pm_renderer *r, const sr_scene_stats *ss, flo
     return st;
 }
 
-/* Builds the photon map's grid over the photons, cells about `cell` wide
- * (or the --grid dimensions). */
-static sluice_status build_grid(pm_renderer *r, float cell, char *err, size_t err_size)
+/* Builds the photon map over the photons: a dense grid of cells about
+ * `cell` wide (sr_point_grid_desc_auto), or of the --grid dimensions; or,
+ * for a radius search of `search_radius` (> 0: the progressive estimate),
+ * the layout sr_point_grid_plan_auto chooses for pm_options.photon_grid
+ * (Purcell 6.4.4: a hash where a dense grid at such cells would be too
+ * large). */
+static sluice_status build_grid(pm_renderer *r, float cell, float search_radius, char *err,
+                                size_t err_size)
 {
     const sr_scene_stats *ss = sr_scene_statistics(r->scene);
     size_t n = r->map_count ? r->map_count : 1;
     char msg[256] = "";
     sluice_status st;
-    if (r->opt.grid_dims[0])
-        st = sr_point_grid_desc_dims(ss->bounds_min, ss->bounds_max, r->opt.grid_dims,
-                                     &r->stats.map_grid, msg, sizeof msg);
-    else {
+    sr_point_grid_plan plan;
+    memset(&plan, 0, sizeof plan);
+    plan.layout = SR_POINT_GRID_DENSE;
+    if (r->opt.grid_dims[0]) {
+        st = sr_point_grid_desc_dims(ss->bounds_min, ss->bounds_max, r->opt.grid_dims, &plan.dense,
+                                     msg, sizeof msg);
+        snprintf(plan.why, sizeof plan.why, "dense: --grid sets its dimensions");
+    } else {
         /* the photons' own box: photons lie on the surfaces that store them
          * (glassball's and ring's floors: a flat box, one cell high) */
         float lo[3], hi[3];
         st = photon_bounds(r, ss, lo, hi);
-        if (st == SLUICE_OK)
-            st = sr_point_grid_desc_auto(lo, hi, n, cell, &r->stats.map_grid, msg, sizeof msg);
-        else
+        if (st != SLUICE_OK) {
             snprintf(msg, sizeof msg, "reading the photons: %s", sluice_context_error(r->ctx));
+        } else if (search_radius > 0 && r->opt.map != SR_POINT_GRID_STENCIL) {
+            st = sr_point_grid_plan_auto(lo, hi, n, cell, search_radius, r->opt.photon_grid, &plan,
+                                         msg, sizeof msg);
+        } else {
+            st = sr_point_grid_desc_auto(lo, hi, n, cell, &plan.dense, msg, sizeof msg);
+            snprintf(plan.why, sizeof plan.why, "dense: %s",
+                     search_radius > 0 ? "the stencil build needs it (its power redistribution "
+                                         "is per cell; a bucket mixes cells)"
+                                       : "the k-nearest search needs it");
+        }
     }
     if (st != SLUICE_OK) {
         sr_set_error(err, err_size, "photon map grid: %s", msg);
         return st;
     }
+    r->stats.map_layout = plan.layout;
+    snprintf(r->stats.map_why, sizeof r->stats.map_why, "%s", plan.why);
     double t0 = sr_clock_seconds();
-    st = sr_point_grid_build(r->grid, &r->stats.map_grid, r->map, sizeof(pm_photon), r->map_count,
-                             r->opt.map, r->opt.slots);
+    if (plan.layout == SR_POINT_GRID_HASHED) {
+        memset(&r->stats.map_grid, 0, sizeof r->stats.map_grid);
+        r->stats.map_hash = plan.hash;
+        st = sr_point_grid_build_hashed(r->grid, &plan.hash, r->map, sizeof(pm_photon),
+                                        r->map_count, r->opt.map);
+    } else {
+        r->stats.map_grid = plan.dense;
+        memset(&r->stats.map_hash, 0, sizeof r->stats.map_hash);
+        st = sr_point_grid_build(r->grid, &plan.dense, r->map, sizeof(pm_photon), r->map_count,
+                                 r->opt.map, r->opt.slots);
+    }
     r->stats.build_map_s += sr_clock_seconds() - t0;
     if (st == SLUICE_OK)
         st = sr_point_grid_statistics(r->grid, &r->stats.map);
@@ -404,7 +449,7 @@ static sluice_status trace_and_build(pm_renderer *r, uint32_t seed, char *err, s
      * take whole cells (blocky caustics on glassball; a quarter is about
      * Purcell's 250x1x250 there). Progressive: the radius search's radius
      * r_i starts at max_radius when set, else at photon_knn_radius, and
-     * cells are half of it. */
+     * dense cells are sized for half of it (hashed cells: r_i itself). */
     const sr_scene_stats *ss = sr_scene_statistics(r->scene);
     double area = storing_area(r->scene);
     size_t n = r->map_count ? r->map_count : 1;
@@ -422,7 +467,7 @@ static sluice_status trace_and_build(pm_renderer *r, uint32_t seed, char *err, s
             if (!(r0 > 0)) {
                 /* from the photons' own k nearest, on a grid for that
                  * search first */
-                st = build_grid(r, cell, err, err_size);
+                st = build_grid(r, cell, 0.0f, err, err_size);
                 if (st != SLUICE_OK)
                     return st;
                 float seen = 0.0f;
@@ -456,9 +501,13 @@ static sluice_status trace_and_build(pm_renderer *r, uint32_t seed, char *err, s
     }
     r->stats.max_radius = r->max_radius;
     r->stats.radius = r->opt.progressive ? r->max_radius : 0.0f;
-    st = build_grid(r, cell, err, err_size);
+    st = build_grid(r, cell, r->opt.progressive ? r->max_radius : 0.0f, err, err_size);
     if (st != SLUICE_OK)
         return st;
+    if (r->stats.map_layout == SR_POINT_GRID_HASHED)
+        r->stats.maps_hashed++;
+    else
+        r->stats.maps_dense++;
     return SLUICE_OK;
 }
 

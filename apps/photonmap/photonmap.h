@@ -60,20 +60,34 @@ typedef struct pm_options {
     /** Adaptive sampling and the target error of the eye pass (adaptive.h):
      *  tiles that stopped take no eye rays and no radiance estimates. */
     sr_adaptive_options sampling;
+    /** The photon map's layout (point_grid.h): SR_POINT_GRID_LAYOUT_AUTO (the
+     *  default), SR_POINT_GRID_DENSE or SR_POINT_GRID_HASHED. Only the
+     *  progressive radius search reads a hashed map (Purcell 6.4.4): auto
+     *  takes the hash there when sr_point_grid_plan_auto finds the dense
+     *  grid's cells too coarse for the radius (a small lit object and a
+     *  distant wall), and the dense grid everywhere else, for the k-nearest
+     *  searches, the stencil build and --grid dimensions. Asking for the hash
+     *  where it cannot serve is an error of pm_renderer_create. */
+    sr_point_grid_layout photon_grid;
 } pm_options;
 
 /** Defaults: 512x384, seed 1, 1 light sample, depth 5, 16,000 photons,
  *  k = 64, automatic radius and grid, count build, 256 slots, atleast, not
- *  progressive (alpha 2/3 when it is). */
+ *  progressive (alpha 2/3 when it is), automatic photon-map layout. */
 pm_options pm_options_default(void);
 
 /** Figures of a render (Purcell Table 6.1's phases and more). */
 typedef struct pm_stats {
     pm_photon_stats photons;
     sr_point_grid_stats map;
-    rt_grid_desc map_grid;
-    float max_radius;       /**< the maximum search radius used */
-    double trace_photons_s; /**< Table 6.1 phases, host wall time */
+    rt_grid_desc map_grid;            /**< the last map's grid (all zero when hashed) */
+    sr_point_grid_layout map_layout;  /**< the layout of the last map the estimates used */
+    sr_point_hash_desc map_hash;      /**< the last map's lattice and table (zero when dense) */
+    unsigned maps_dense, maps_hashed; /**< maps the estimates used, per layout (progressive:
+                                          one per sample) */
+    char map_why[256];                /**< why the last map has its layout */
+    float max_radius;                 /**< the maximum search radius used */
+    double trace_photons_s;           /**< Table 6.1 phases, host wall time */
     double build_map_s;
     double trace_rays_s; /**< eye, specular and shadow rays and their shading */
     double estimate_s;   /**< the radiance estimates */

@@ -20,7 +20,11 @@
  *
  * Sorting each cell after the scatter costs little (cells are short) and
  * makes every build's `order` the same array, so the renderer's image does
- * not depend on timing. */
+ * not depend on timing.
+ *
+ * The hashed layout (Purcell 6.4.4) differs only in the first step:
+ * pg_hash_key gives each point its bucket instead of its cell, and the
+ * count and bitonic builds then run over buckets as they run over cells. */
 #include "point_grid.h"
 
 #include "app_error.h"
@@ -39,7 +43,8 @@
 struct sr_point_grid {
     sluice_context *ctx;
     sluice_program *prog;
-    sluice_kernel *k_key, *k_fill, *k_scatter, *k_finish, *k_finish_stencil, *k_pick, *k_place;
+    sluice_kernel *k_key, *k_hash_key, *k_fill, *k_scatter, *k_finish, *k_finish_stencil, *k_pick,
+        *k_place;
     sluice_counters *counters;
     /* scratch and result streams, kept and grown between builds */
     sluice_stream *keys, *values, *order, *start, *count, *arrived, *cursor;
@@ -65,6 +70,7 @@ void sr_point_grid_destroy(sr_point_grid *g)
     if (!g)
         return;
     sluice_kernel_destroy(g->k_key);
+    sluice_kernel_destroy(g->k_hash_key);
     sluice_kernel_destroy(g->k_fill);
     sluice_kernel_destroy(g->k_scatter);
     sluice_kernel_destroy(g->k_finish);
@@ -96,13 +102,10 @@ sluice_status sr_point_grid_create(sluice_context *ctx, sr_point_grid **out)
     struct {
         sluice_kernel **k;
         const char *name;
-    } ks[] = {{&g->k_key, "pg_key"},
-              {&g->k_fill, "pg_fill"},
-              {&g->k_scatter, "pg_scatter"},
-              {&g->k_finish, "pg_finish"},
-              {&g->k_finish_stencil, "pg_finish_stencil"},
-              {&g->k_pick, "pg_pick"},
-              {&g->k_place, "pg_place"}};
+    } ks[] = {{&g->k_key, "pg_key"},       {&g->k_hash_key, "pg_hash_key"},
+              {&g->k_fill, "pg_fill"},     {&g->k_scatter, "pg_scatter"},
+              {&g->k_finish, "pg_finish"}, {&g->k_finish_stencil, "pg_finish_stencil"},
+              {&g->k_pick, "pg_pick"},     {&g->k_place, "pg_place"}};
     for (size_t i = 0; st == SLUICE_OK && i < sizeof ks / sizeof *ks; ++i)
         st = sluice_kernel_create(g->prog, ks[i].name, ks[i].k);
     if (st == SLUICE_OK)
@@ -153,6 +156,55 @@ uint32_t sr_point_grid_cell_of(const rt_grid_desc *desc, const float p[3])
     pg_params g;
     params_make(&g, desc, (size_t)desc->dims[0] * desc->dims[1] * desc->dims[2], 12, 0);
     return pg_cell(p[0], p[1], p[2], &g);
+}
+
+static void hash_params_make(pg_hash_params *p, const sr_point_hash_desc *d, size_t stride)
+{
+    memset(p, 0, sizeof *p);
+    for (int a = 0; a < 3; ++a)
+        p->lo[a] = d->lo[a];
+    p->cell = d->cell;
+    p->inv_cell = 1.0f / d->cell;
+    p->mask = d->buckets - 1u;
+    p->buckets = d->buckets;
+    p->stride = (rt_u32)(stride / 4);
+}
+
+uint32_t sr_point_grid_bucket_of(const sr_point_hash_desc *desc, const float p[3],
+                                 uint32_t coords[3])
+{
+    pg_hash_params h;
+    hash_params_make(&h, desc, 12);
+    uint32_t b = pg_hash_point(p[0], p[1], p[2], &h);
+    if (coords) {
+        for (int a = 0; a < 3; ++a)
+            coords[a] = b == h.buckets ? 0u : pg_hash_axis(p[a], h.lo[a], h.inv_cell);
+    }
+    return b;
+}
+
+/* Checks a hashed layout as the builds need it. */
+static sluice_status hash_desc_check(const sr_point_hash_desc *d, char *err, size_t err_size)
+{
+    for (int a = 0; a < 3; ++a)
+        if (!isfinite(d->lo[a])) {
+            sr_set_error(err, err_size, "point grid: the hash lattice's origin is not finite");
+            return SLUICE_ERROR_INVALID_ARGUMENT;
+        }
+    /* 1 / cell must be finite too: the cell function multiplies by it */
+    if (!isfinite(d->cell) || !(d->cell > 0.0f) || !isfinite(1.0f / d->cell)) {
+        sr_set_error(err, err_size, "point grid: a hash cell of %g (positive and finite needed)",
+                     (double)d->cell);
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    if (d->buckets == 0 || (d->buckets & (d->buckets - 1u)) ||
+        d->buckets > SR_POINT_HASH_MAX_BUCKETS) {
+        sr_set_error(err, err_size,
+                     "point grid: %u hash buckets (a power of two from 1 to %u needed)", d->buckets,
+                     SR_POINT_HASH_MAX_BUCKETS);
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    return SLUICE_OK;
 }
 
 /* Launches a generator kernel over `count` records. */
@@ -315,21 +367,30 @@ static sluice_status build_stencil(sr_point_grid *g, size_t n, uint32_t cells, u
     return st;
 }
 
-sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sluice_stream *points,
-                                  size_t stride, size_t n, sr_point_grid_build_kind kind,
-                                  uint32_t slots)
+/* Both layouts' builds: a dense grid (`desc`) or a hashed one (`hdesc`). */
+static sluice_status build(sr_point_grid *g, const rt_grid_desc *desc,
+                           const sr_point_hash_desc *hdesc, sluice_stream *points, size_t stride,
+                           size_t n, sr_point_grid_build_kind kind, uint32_t slots)
 {
-    if (!g)
-        return SLUICE_ERROR_INVALID_ARGUMENT;
     double t0 = now();
     g->message[0] = '\0';
     g->built = 0;
     memset(&g->view, 0, sizeof g->view);
     memset(&g->stats, 0, sizeof g->stats);
-    if (!desc || !points)
+    if ((!desc && !hdesc) || !points)
         return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT, "point grid: NULL argument");
     size_t cells = 0;
-    sluice_status st = rt_grid_desc_check(desc, &cells, g->message, sizeof g->message);
+    sluice_status st;
+    if (desc) {
+        st = rt_grid_desc_check(desc, &cells, g->message, sizeof g->message);
+    } else {
+        st = hash_desc_check(hdesc, g->message, sizeof g->message);
+        cells = hdesc->buckets;
+        if (st == SLUICE_OK && kind == SR_POINT_GRID_STENCIL)
+            return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT,
+                        "point grid: no stencil build of a hashed grid (its power "
+                        "redistribution is per cell, and a bucket mixes cells: Purcell 6.4.4)");
+    }
     if (st != SLUICE_OK)
         return st;
     if (stride < 12 || stride % 4 || stride != sluice_stream_record_size(points))
@@ -363,7 +424,11 @@ sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sl
 
     const uint32_t nc = (uint32_t)cells;
     pg_params p;
-    params_make(&p, desc, cells, stride, slots);
+    pg_hash_params hp;
+    if (desc)
+        params_make(&p, desc, cells, stride, slots);
+    else
+        hash_params_make(&hp, hdesc, stride);
     const char *step = "allocating streams";
     size_t order_cap = kind == SR_POINT_GRID_STENCIL ? cells * slots : n;
     st = ensure(g->ctx, &g->keys, n);
@@ -384,15 +449,17 @@ sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sl
 
     step = "keying the points";
     uint32_t c[3] = {0, 0, 0};
-    st = sluice_kernel_set_stream(g->k_key, 0, points, 0);
+    sluice_kernel *kk = desc ? g->k_key : g->k_hash_key;
+    st = sluice_kernel_set_stream(kk, 0, points, 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_arg(g->k_key, 1, sizeof p, &p);
+        st = desc ? sluice_kernel_set_arg(kk, 1, sizeof p, &p)
+                  : sluice_kernel_set_arg(kk, 1, sizeof hp, &hp);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(g->k_key, 2, g->keys, 0);
+        st = sluice_kernel_set_stream(kk, 2, g->keys, 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(g->k_key, 3, g->values, 0);
+        st = sluice_kernel_set_stream(kk, 3, g->values, 0);
     if (st == SLUICE_OK)
-        st = launch_counted(g, g->k_key, n, c);
+        st = launch_counted(g, kk, n, c);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(g->keys, n);
     if (st == SLUICE_OK)
@@ -428,7 +495,13 @@ sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sl
     if (st != SLUICE_OK)
         goto runtime_fail;
 
-    g->view.desc = *desc;
+    if (desc) {
+        g->view.layout = SR_POINT_GRID_DENSE;
+        g->view.desc = *desc;
+    } else {
+        g->view.layout = SR_POINT_GRID_HASHED;
+        g->view.hash = *hdesc;
+    }
     g->view.cells = nc;
     g->view.kind = kind;
     g->view.slots = slots;
@@ -453,6 +526,36 @@ runtime_fail:
     if (st == SLUICE_ERROR_OUT_OF_MEMORY && !*sluice_context_error(g->ctx))
         return FAIL(g, st, "point grid: %s: out of memory", step);
     return FAIL(g, st, "point grid: %s: %s", step, sluice_context_error(g->ctx));
+}
+
+sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sluice_stream *points,
+                                  size_t stride, size_t n, sr_point_grid_build_kind kind,
+                                  uint32_t slots)
+{
+    if (!g)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (!desc) {
+        memset(&g->view, 0, sizeof g->view);
+        memset(&g->stats, 0, sizeof g->stats);
+        g->built = 0;
+        return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT, "point grid: NULL argument");
+    }
+    return build(g, desc, NULL, points, stride, n, kind, slots);
+}
+
+sluice_status sr_point_grid_build_hashed(sr_point_grid *g, const sr_point_hash_desc *desc,
+                                         sluice_stream *points, size_t stride, size_t n,
+                                         sr_point_grid_build_kind kind)
+{
+    if (!g)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    if (!desc) {
+        memset(&g->view, 0, sizeof g->view);
+        memset(&g->stats, 0, sizeof g->stats);
+        g->built = 0;
+        return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT, "point grid: NULL argument");
+    }
+    return build(g, NULL, desc, points, stride, n, kind, 0);
 }
 
 sluice_status sr_point_grid_get(const sr_point_grid *g, sr_point_grid_view *view)
@@ -537,13 +640,12 @@ sluice_status sr_point_grid_desc_dims(const float lo[3], const float hi[3], cons
     return desc_finish(l, h, dims, out, err, err_size);
 }
 
-sluice_status sr_point_grid_desc_auto(const float lo[3], const float hi[3], size_t points,
-                                      float radius, rt_grid_desc *out, char *err, size_t err_size)
+/* sr_point_grid_desc_auto; also the cells a grid at the edge aimed at would
+ * have (*wanted) and the edge over the one aimed at (*coarsening). */
+static sluice_status desc_auto(const float lo[3], const float hi[3], size_t points, float radius,
+                               rt_grid_desc *out, double *wanted, double *coarsening, char *err,
+                               size_t err_size)
 {
-    if (!lo || !hi || !out) {
-        sr_set_error(err, err_size, "sr_point_grid_desc_auto: NULL argument");
-        return SLUICE_ERROR_INVALID_ARGUMENT;
-    }
     memset(out, 0, sizeof *out);
     if (!isfinite(radius) || !(radius > 0.0f)) {
         sr_set_error(err, err_size, "point grid: the search radius must be positive, not %g",
@@ -562,9 +664,14 @@ sluice_status sr_point_grid_desc_auto(const float lo[3], const float hi[3], size
         cap = 64.0;
     if (cap > (double)SR_POINT_GRID_AUTO_MAX_CELLS)
         cap = (double)SR_POINT_GRID_AUTO_MAX_CELLS;
-    double edge = SR_POINT_GRID_AUTO_EDGE * (double)radius, padded[3];
+    const double aim = SR_POINT_GRID_AUTO_EDGE * (double)radius;
+    double edge = aim, padded[3];
     for (int a = 0; a < 3; ++a)
         padded[a] = ext[a] + 2.0 * pad;
+    *wanted = 1.0;
+    for (int a = 0; a < 3; ++a)
+        if (ext[a] > max_ext * RT_GRID_FLAT_RATIO)
+            *wanted *= fmax(ceil(padded[a] / aim), 1.0);
     uint32_t dims[3];
     for (;;) {
         double cells = 1.0;
@@ -592,5 +699,100 @@ sluice_status sr_point_grid_desc_auto(const float lo[3], const float hi[3], size
         l[a] = centre - half;
         h[a] = centre + half;
     }
+    *coarsening = edge / aim;
     return desc_finish(l, h, dims, out, err, err_size);
+}
+
+sluice_status sr_point_grid_desc_auto(const float lo[3], const float hi[3], size_t points,
+                                      float radius, rt_grid_desc *out, char *err, size_t err_size)
+{
+    if (!lo || !hi || !out) {
+        sr_set_error(err, err_size, "sr_point_grid_desc_auto: NULL argument");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    double wanted, coarsening;
+    return desc_auto(lo, hi, points, radius, out, &wanted, &coarsening, err, err_size);
+}
+
+sluice_status sr_point_hash_desc_auto(const float lo[3], const float hi[3], size_t points,
+                                      float radius, sr_point_hash_desc *out, char *err,
+                                      size_t err_size)
+{
+    if (!lo || !hi || !out) {
+        sr_set_error(err, err_size, "sr_point_hash_desc_auto: NULL argument");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    memset(out, 0, sizeof *out);
+    if (!isfinite(radius) || !(radius > 0.0f)) {
+        sr_set_error(err, err_size, "point grid: the search radius must be positive, not %g",
+                     (double)radius);
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    double ext[3], max_ext, mag;
+    sluice_status st = check_bounds(lo, hi, ext, &max_ext, &mag, err, err_size);
+    if (st != SLUICE_OK)
+        return st;
+    /* cells no finer than the box cut into SR_POINT_HASH_MAX_SIDE, nor than
+     * float tells apart near the box (coordinates of magnitude mag are
+     * 2^-24 mag apart: at 2^-20 mag the cell function's rounding stays
+     * within a sixteenth of a cell). Finer cells would still be correct,
+     * the cell function being monotone, only wasteful. */
+    double edge = SR_POINT_HASH_EDGE * (double)radius;
+    edge = fmax(edge, max_ext / (double)SR_POINT_HASH_MAX_SIDE);
+    edge = fmax(edge, mag * 0x1p-20);
+    if (!(edge <= 0x1p100))
+        edge = 0x1p100;
+    double want = (double)points * SR_POINT_HASH_BUCKETS_PER_POINT;
+    uint32_t buckets = 64;
+    while ((double)buckets < want && buckets < SR_POINT_HASH_MAX_BUCKETS)
+        buckets <<= 1;
+    for (int a = 0; a < 3; ++a)
+        out->lo[a] = lo[a];
+    out->cell = (float)edge;
+    out->buckets = buckets;
+    return hash_desc_check(out, err, err_size);
+}
+
+sluice_status sr_point_grid_plan_auto(const float lo[3], const float hi[3], size_t points,
+                                      float dense_radius, float search_radius,
+                                      sr_point_grid_layout request, sr_point_grid_plan *out,
+                                      char *err, size_t err_size)
+{
+    if (!lo || !hi || !out) {
+        sr_set_error(err, err_size, "sr_point_grid_plan_auto: NULL argument");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    memset(out, 0, sizeof *out);
+    if (request != SR_POINT_GRID_DENSE && request != SR_POINT_GRID_HASHED &&
+        request != SR_POINT_GRID_LAYOUT_AUTO) {
+        sr_set_error(err, err_size, "point grid: unknown layout %d", (int)request);
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
+    sluice_status st = desc_auto(lo, hi, points, dense_radius, &out->dense, &out->wanted_cells,
+                                 &out->coarsening, err, err_size);
+    if (st == SLUICE_OK)
+        st = sr_point_hash_desc_auto(lo, hi, points, search_radius, &out->hash, err, err_size);
+    if (st != SLUICE_OK) {
+        memset(out, 0, sizeof *out);
+        return st;
+    }
+    const rt_grid_desc *d = &out->dense;
+    size_t cells = (size_t)d->dims[0] * d->dims[1] * d->dims[2];
+    double aim = SR_POINT_GRID_AUTO_EDGE * (double)dense_radius;
+    int hashed =
+        request == SR_POINT_GRID_HASHED ||
+        (request == SR_POINT_GRID_LAYOUT_AUTO && out->coarsening > SR_POINT_GRID_HASH_COARSENING);
+    out->layout = hashed ? SR_POINT_GRID_HASHED : SR_POINT_GRID_DENSE;
+    const char *how = request == SR_POINT_GRID_LAYOUT_AUTO ? "" : " (asked for)";
+    const char *name = hashed ? "hash" : "dense";
+    if (out->coarsening > 1.0)
+        snprintf(out->why, sizeof out->why,
+                 "%s%s: a dense grid at cells of %.3g would need %.3g cells; capped at %zu "
+                 "(%ux%ux%u) its cells are %.3gx coarser",
+                 name, how, aim, out->wanted_cells, cells, d->dims[0], d->dims[1], d->dims[2],
+                 out->coarsening);
+    else
+        snprintf(out->why, sizeof out->why, "%s%s: a dense grid's cells of %.3g fit in %ux%ux%u",
+                 name, how, aim, d->dims[0], d->dims[1], d->dims[2]);
+    return SLUICE_OK;
 }

@@ -28,6 +28,22 @@
  *            scatter. The fast default.
  * The object keeps its kernels and scratch streams between builds (a
  * progressive photon map is rebuilt every pass); streams only grow.
+ *
+ * Layouts. The dense grid above has a record per cell of the box, so cells
+ * of about a search radius over a box much larger than the radius (a small
+ * lit object before a distant wall) need more cells than the photons
+ * justify, and sr_point_grid_desc_auto makes them coarser instead: a search
+ * then walks many more photons per cell. The hashed layout
+ * (sr_point_grid_build_hashed; Purcell 6.4.4, after Wald et al. 2002, and
+ * the hash grid of Hachisuka et al.'s progressive photon mapping as
+ * Davidovic's thesis 4.5.1 builds it) keeps cubes of about the radius: cell
+ * (ix, iy, iz) of an unbounded lattice goes to bucket hash(ix, iy, iz) of a
+ * power-of-two table of a few buckets per point (kernels/render/pg_types.h),
+ * and the same builds run over bucket ids. The result is the representation
+ * above with buckets for cells: a bucket's points in ascending index order,
+ * possibly from several cells (collisions), which a search must tell apart
+ * (the kNN search's radius mode does: apps/photonmap/knn.h).
+ * sr_point_grid_plan_auto chooses between the two.
  */
 #ifndef SLUICE_SR_POINT_GRID_H
 #define SLUICE_SR_POINT_GRID_H
@@ -69,15 +85,60 @@ typedef enum sr_point_grid_build_kind {
 #define SR_POINT_GRID_AUTO_MAX_CELLS (1u << 22)
 #define SR_POINT_GRID_AUTO_CELLS_PER_POINT 4u
 
+/** How the cells are laid out in memory. */
+typedef enum sr_point_grid_layout {
+    SR_POINT_GRID_DENSE = 0,      /**< a record per cell of the box (rt_grid_desc) */
+    SR_POINT_GRID_HASHED = 1,     /**< lattice cells hashed into buckets (sr_point_hash_desc) */
+    SR_POINT_GRID_LAYOUT_AUTO = 2 /**< only as a request to sr_point_grid_plan_auto */
+} sr_point_grid_layout;
+
+/** The hashed layout: cubes of edge `cell` from `lo`, hashed into `buckets`. */
+typedef struct sr_point_hash_desc {
+    float lo[3];      /**< the lattice's origin (points below it clamp to coordinate 0) */
+    float cell;       /**< cube edge, > 0 and finite */
+    uint32_t buckets; /**< a power of two, 1 .. SR_POINT_HASH_MAX_BUCKETS */
+} sr_point_hash_desc;
+
+/** Most buckets of a hashed grid (2^27, as RT_GRID_MAX_CELLS). */
+#define SR_POINT_HASH_MAX_BUCKETS (1u << 27)
+
+/** Buckets per point that sr_point_hash_desc_auto aims at: the table is the
+ *  smallest power of two of at least this many per point (so 2 to 4), at
+ *  least 64: few collisions (a bucket then holds on average under one
+ *  occupied cell besides its own), little memory (20 bytes per bucket over
+ *  the build and the search). */
+#define SR_POINT_HASH_BUCKETS_PER_POINT 2u
+
+/** Cell edge over search radius of sr_point_hash_desc_auto. At one radius a
+ *  search visits 3 cells across an axis (rarely 4: its reach is widened for
+ *  rounding), 3 radii wide on average; coarser cells mean fewer bucket
+ *  lookups but more photons examined per cell (at 2 radii: 2 cells, 4 radii
+ *  wide). bench/README.md has the measurements behind it. */
+#define SR_POINT_HASH_EDGE 1.0
+
+/** Most lattice cells along an axis that sr_point_hash_desc_auto makes
+ *  across the points' box: cells grow past the asked edge beyond it, so
+ *  coordinates stay well inside PG_HASH_MAX_COORD and float rounding of the
+ *  cell function stays far below a cell. */
+#define SR_POINT_HASH_MAX_SIDE (1u << 21)
+
+/** sr_point_grid_plan_auto's rule: with a layout of SR_POINT_GRID_LAYOUT_AUTO
+ *  it takes the hashed layout when sr_point_grid_desc_auto had to make the
+ *  dense cells more than this many times coarser than it aimed at: 1, that
+ *  is whenever its cap on cells bites. No margin: in the progressive photon
+ *  mapper the hash's radius search was faster than the dense grid's on every
+ *  scene measured, even where the dense cells fit (bench/README.md). */
+#define SR_POINT_GRID_HASH_COARSENING 1.0
+
 /** Statistics of the last build. */
 typedef struct sr_point_grid_stats {
     size_t points;            /**< points given */
-    size_t cells;             /**< cells of the grid */
+    size_t cells;             /**< cells of the grid (hashed: buckets) */
     size_t stored;            /**< points stored in the grid (listed in order) */
     size_t dropped_nonfinite; /**< points with a non-finite coordinate (dropped) */
-    size_t occupied_cells;    /**< cells with at least one stored point */
-    uint32_t max_per_cell;    /**< most points that arrived in one cell */
-    double mean_per_occupied; /**< arrived points / occupied cells */
+    size_t occupied_cells;    /**< cells (hashed: buckets) with at least one stored point */
+    uint32_t max_per_cell;    /**< most points that arrived in one cell (bucket) */
+    double mean_per_occupied; /**< arrived points / occupied cells (buckets) */
     size_t overflow_points;   /**< stencil: points that arrived but were not stored */
     size_t overfull_cells;    /**< stencil: cells with more points than slots */
     double build_seconds;     /**< host wall time of the build, waited for */
@@ -86,15 +147,17 @@ typedef struct sr_point_grid_stats {
 /** What the grid holds after a build (the streams stay the grid's: do not
  *  destroy them; they change at the next build). */
 typedef struct sr_point_grid_view {
-    rt_grid_desc desc;
-    uint32_t cells; /**< dims[0] * dims[1] * dims[2] */
+    sr_point_grid_layout layout; /**< SR_POINT_GRID_DENSE or SR_POINT_GRID_HASHED */
+    rt_grid_desc desc;           /**< dense: the grid (all zero when hashed) */
+    sr_point_hash_desc hash;     /**< hashed: the lattice and table (all zero when dense) */
+    uint32_t cells;              /**< dense: dims[0] * dims[1] * dims[2]; hashed: buckets */
     sr_point_grid_build_kind kind;
     uint32_t slots;              /**< stencil: places per cell; 0 otherwise */
     size_t points;               /**< points the grid was built over (indices below this) */
     sluice_stream *order;        /**< uint32 point indices */
-    sluice_stream *cell_start;   /**< uint32, cells records */
-    sluice_stream *cell_count;   /**< uint32, cells records */
-    sluice_stream *cell_arrived; /**< uint32, cells records */
+    sluice_stream *cell_start;   /**< uint32, cells (buckets) + 1 records */
+    sluice_stream *cell_count;   /**< uint32, cells (buckets) records */
+    sluice_stream *cell_arrived; /**< uint32, cells (buckets) records */
 } sr_point_grid_view;
 
 typedef struct sr_point_grid sr_point_grid;
@@ -125,6 +188,22 @@ sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sl
                                   size_t stride, size_t n, sr_point_grid_build_kind kind,
                                   uint32_t slots);
 
+/**
+ * (Re)builds the grid in the hashed layout `desc` over the first `n` records
+ * of `points` (as sr_point_grid_build): the same count and bitonic builds
+ * over bucket ids instead of cell ids, so the view lists each bucket's points
+ * in ascending index order. The stencil build is refused
+ * (SLUICE_ERROR_INVALID_ARGUMENT): its power redistribution scales a cell's
+ * stored points by the cell's arrivals, and a bucket mixes cells (Purcell
+ * 6.4.4 names this problem). Other errors as sr_point_grid_build, and
+ * SLUICE_ERROR_INVALID_ARGUMENT for a bad description (cell not finite or
+ * not positive, lo not finite, buckets not a power of two, 0 or above
+ * SR_POINT_HASH_MAX_BUCKETS). On failure the previous grid is gone.
+ */
+sluice_status sr_point_grid_build_hashed(sr_point_grid *g, const sr_point_hash_desc *desc,
+                                         sluice_stream *points, size_t stride, size_t n,
+                                         sr_point_grid_build_kind kind);
+
 /** The grid of the last successful build (all zero before one). */
 sluice_status sr_point_grid_get(const sr_point_grid *g, sr_point_grid_view *view);
 
@@ -140,6 +219,54 @@ const char *sr_point_grid_error(const sr_point_grid *g);
  *  cell count for a point with a non-finite coordinate. `desc` is trusted
  *  (rt_grid_desc_check). */
 uint32_t sr_point_grid_cell_of(const rt_grid_desc *desc, const float p[3]);
+
+/** The bucket of a point by the same arithmetic as the device build
+ *  (pg_hash_point in kernels/render/pg_types.h): the C reference of the
+ *  tests. Returns desc->buckets for a point with a non-finite coordinate.
+ *  `desc` is trusted. `coords` (may be NULL) receives the point's lattice
+ *  cell (zeros for a non-finite point). */
+uint32_t sr_point_grid_bucket_of(const sr_point_hash_desc *desc, const float p[3],
+                                 uint32_t coords[3]);
+
+/**
+ * A hashed layout over the points' bounds [lo, hi] for searches of radius
+ * `radius` (> 0): cubes of edge SR_POINT_HASH_EDGE * radius, grown where
+ * the box would be more than SR_POINT_HASH_MAX_SIDE cells across; the lattice starts
+ * at lo; SR_POINT_HASH_BUCKETS_PER_POINT buckets per point rounded up to a
+ * power of two, at least 64 and at most SR_POINT_HASH_MAX_BUCKETS. Errors:
+ * non-finite bounds or radius, radius <= 0, lo > hi:
+ * SLUICE_ERROR_INVALID_ARGUMENT.
+ */
+sluice_status sr_point_hash_desc_auto(const float lo[3], const float hi[3], size_t points,
+                                      float radius, sr_point_hash_desc *out, char *err,
+                                      size_t err_size);
+
+/** What sr_point_grid_plan_auto chose, and why. */
+typedef struct sr_point_grid_plan {
+    sr_point_grid_layout layout; /**< SR_POINT_GRID_DENSE or SR_POINT_GRID_HASHED */
+    rt_grid_desc dense;          /**< the dense grid (always filled) */
+    sr_point_hash_desc hash;     /**< the hashed layout (always filled) */
+    double coarsening;           /**< dense cell edge over the edge aimed at (1: as aimed) */
+    double wanted_cells;         /**< cells a dense grid at the edge aimed at would have */
+    char why[256];               /**< one line: the choice and its reason */
+} sr_point_grid_plan;
+
+/**
+ * Chooses the layout for points in [lo, hi]: the dense grid of
+ * sr_point_grid_desc_auto(lo, hi, points, dense_radius) and the hashed
+ * layout of sr_point_hash_desc_auto(lo, hi, points, search_radius) are both
+ * made, and `request` picks one: SR_POINT_GRID_DENSE, SR_POINT_GRID_HASHED,
+ * or SR_POINT_GRID_LAYOUT_AUTO: hashed when the dense cells came out more
+ * than SR_POINT_GRID_HASH_COARSENING times coarser than aimed at. Only a
+ * search that can read a hashed grid should ask for it or for auto (the
+ * kNN search's radius mode). `why` says which and why, with the figures.
+ * Errors as the two helpers, and an unknown request
+ * (SLUICE_ERROR_INVALID_ARGUMENT).
+ */
+sluice_status sr_point_grid_plan_auto(const float lo[3], const float hi[3], size_t points,
+                                      float dense_radius, float search_radius,
+                                      sr_point_grid_layout request, sr_point_grid_plan *out,
+                                      char *err, size_t err_size);
 
 /**
  * A grid over the points' bounds [lo, hi] for searches of radius `radius`

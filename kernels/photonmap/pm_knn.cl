@@ -582,6 +582,167 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
     }
 }
 
+/* The radius search over a hashed grid (Purcell 6.4.4): the photons of
+ * map[b .. e), one bucket, that lie in lattice cell `c` (a bucket holds
+ * every cell hashed to it: the others' photons are skipped, by the build's
+ * own cell function, so a bucket visited for two cells gives each its own
+ * photons and none twice) and within the maximum radius. The radius mode's
+ * rule of pm_scan_run (every photon within max_r2 is added, r2 the farthest
+ * one's), in blocks of PM_MAP_BLOCK, short runs one at a time. */
+static inline int8 pm_hash_axis8(float8 x, float lo, float inv_cell)
+{
+    /* pg_hash_axis, lane by lane: the same subtraction and product, and
+     * clamping before the truncating conversion gives its three cases */
+    float8 f = (x - lo) * inv_cell;
+    return convert_int8(fmin(fmax(f, (float8)(0.0f)), (float8)((float)PG_HASH_MAX_COORD)));
+}
+
+static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
+                                  const pg_hash_params *h, const pm_knn_params *p,
+                                  global const float *map, global uint *indices)
+{
+    uint stride = p->map_stride;
+    if (e - b < PM_SHORT_RUN) {
+        for (uint j = b; j < e; ++j) {
+            float x = map[PM_MAP_X * stride + j], y = map[PM_MAP_Y * stride + j],
+                  z = map[PM_MAP_Z * stride + j];
+            float dx = x - st->px, dy = y - st->py, dz = z - st->pz;
+            float d2 = dx * dx + dy * dy + dz * dz;
+            if (!(d2 <= p->max_r2))
+                continue;
+            if ((int)pg_hash_axis(x, h->lo[0], h->inv_cell) != c[0] ||
+                (int)pg_hash_axis(y, h->lo[1], h->inv_cell) != c[1] ||
+                (int)pg_hash_axis(z, h->lo[2], h->inv_cell) != c[2])
+                continue;
+            if (p->normal_filter &&
+                !(st->nx * map[PM_MAP_DX * stride + j] + st->ny * map[PM_MAP_DY * stride + j] +
+                      st->nz * map[PM_MAP_DZ * stride + j] <
+                  0.0f))
+                continue;
+            st->r2 = fmax(st->r2, d2);
+            if (p->index_cap)
+                pm_index(st, p, map, j, st->count, indices);
+            st->sr += map[PM_MAP_R * stride + j];
+            st->sg += map[PM_MAP_G * stride + j];
+            st->sb += map[PM_MAP_B * stride + j];
+            st->count++;
+        }
+        return;
+    }
+    const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
+    float8 ar = (float8)(0.0f), ag = (float8)(0.0f), ab = (float8)(0.0f);
+    for (uint j = b; j < e; j += PM_MAP_BLOCK) {
+        float8 x = vload8(0, map + PM_MAP_X * stride + j);
+        float8 y = vload8(0, map + PM_MAP_Y * stride + j);
+        float8 z = vload8(0, map + PM_MAP_Z * stride + j);
+        float8 dx = x - st->px, dy = y - st->py, dz = z - st->pz;
+        float8 d2 = dx * dx + dy * dy + dz * dz;
+        int8 m = (lane < (int8)((int)(e - j))) & (d2 <= (float8)(p->max_r2));
+        if (!any(m))
+            continue;
+        m &= (pm_hash_axis8(x, h->lo[0], h->inv_cell) == (int8)(c[0])) &
+             (pm_hash_axis8(y, h->lo[1], h->inv_cell) == (int8)(c[1])) &
+             (pm_hash_axis8(z, h->lo[2], h->inv_cell) == (int8)(c[2]));
+        if (p->normal_filter) {
+            float8 n = st->nx * vload8(0, map + PM_MAP_DX * stride + j) +
+                       st->ny * vload8(0, map + PM_MAP_DY * stride + j) +
+                       st->nz * vload8(0, map + PM_MAP_DZ * stride + j);
+            m &= n < (float8)(0.0f);
+        }
+        if (!any(m))
+            continue;
+        st->r2 = fmax(st->r2, pm_hmax8(select((float8)(0.0f), d2, m)));
+        if (p->index_cap) {
+            int mm[PM_MAP_BLOCK];
+            vstore8(m, 0, mm);
+            uint k = st->count;
+            for (int l = 0; l < PM_MAP_BLOCK; ++l)
+                if (mm[l])
+                    pm_index(st, p, map, j + (uint)l, k++, indices);
+        }
+        ar += select((float8)(0.0f), vload8(0, map + PM_MAP_R * stride + j), m);
+        ag += select((float8)(0.0f), vload8(0, map + PM_MAP_G * stride + j), m);
+        ab += select((float8)(0.0f), vload8(0, map + PM_MAP_B * stride + j), m);
+        st->count += (uint)(-pm_hsum8i(m));
+    }
+    st->sr += pm_hsum8(ar);
+    st->sg += pm_hsum8(ag);
+    st->sb += pm_hsum8(ab);
+}
+
+/* The radius search (pm_knn_params.k unread: every photon within the
+ * maximum radius) over a hashed grid, one work-item per query, in one pass:
+ * the lattice cells that the query's sphere, widened for rounding, overlaps
+ * (cut to the cells of the photons' bounding box), each looked up in its
+ * bucket. The widening: a photon the distance test takes lies within
+ * r (1 + 2^-21) of the query along each axis, and computing q -+ reach
+ * rounds by at most 2^-24 (|q| + reach); reach = r + (|q| + r) 2^-20 covers
+ * both, and the cell function is monotone, so the photon's cell is in the
+ * range. Results as the dense search's radius mode: the same photons, r2
+ * the farthest one's, flags PM_KNN_DONE | PM_KNN_HIT_MAX_RADIUS; `shells`
+ * holds the cells looked up. */
+__kernel void pm_knn_hash(SLUICE_PARAMS, global const pm_query *queries, global const float *map,
+                          global const uint *map_start, global const uint *bucket_count,
+                          pg_hash_params h, pm_knn_params p, global pm_knn_result *results,
+                          global uint *indices)
+{
+    SLUICE_FOR_EACH (q) {
+        pm_query Q = queries[q];
+        pm_knn_result r = {0.0f, 0.0f, 0.0f, 0.0f, 0u, 0u, PM_KNN_DONE};
+        if (!pg_finite(Q.px) || !pg_finite(Q.py) || !pg_finite(Q.pz)) {
+            r.flags |= PM_KNN_BAD_QUERY;
+            results[q] = r;
+            continue;
+        }
+        pm_state st;
+        st.px = Q.px;
+        st.py = Q.py;
+        st.pz = Q.pz;
+        st.nx = Q.nx;
+        st.ny = Q.ny;
+        st.nz = Q.nz;
+        st.sr = st.sg = st.sb = st.r2 = 0.0f;
+        st.gx = 0.0f;
+        st.count = 0u;
+        st.flags = 0u;
+        st.q = q;
+        st.hd = 0;
+        st.hi = 0;
+        float qp[3] = {Q.px, Q.py, Q.pz};
+        uint looked = 0u;
+        if (pm_box_d2(qp, &p) <= p.max_r2) {
+            float rad = sqrt(p.max_r2);
+            int a0[3], a1[3];
+            for (int a = 0; a < 3; ++a) {
+                float reach = rad + (fabs(qp[a]) + rad) * 0x1p-20f;
+                a0[a] = (int)max(pg_hash_axis(qp[a] - reach, h.lo[a], h.inv_cell),
+                                 pg_hash_axis(p.box_lo[a], h.lo[a], h.inv_cell));
+                a1[a] = (int)min(pg_hash_axis(qp[a] + reach, h.lo[a], h.inv_cell),
+                                 pg_hash_axis(p.box_hi[a], h.lo[a], h.inv_cell));
+            }
+            int c[3];
+            for (c[2] = a0[2]; c[2] <= a1[2]; ++c[2])
+                for (c[1] = a0[1]; c[1] <= a1[1]; ++c[1])
+                    for (c[0] = a0[0]; c[0] <= a1[0]; ++c[0]) {
+                        uint bk = pg_hash_bucket((uint)c[0], (uint)c[1], (uint)c[2], h.mask);
+                        uint n = bucket_count[bk];
+                        ++looked;
+                        if (n)
+                            pm_scan_bucket(&st, map_start[bk], map_start[bk] + n, c, &h, &p, map,
+                                           indices);
+                    }
+        }
+        r.sr = st.sr;
+        r.sg = st.sg;
+        r.sb = st.sb;
+        r.r2 = st.r2;
+        r.count = st.count;
+        r.shells = looked;
+        r.flags |= st.flags | PM_KNN_HIT_MAX_RADIUS;
+        results[q] = r;
+    }
+}
+
 /* The live queries that are not done, into the next live stream. */
 __kernel void pm_knn_live(SLUICE_PARAMS, global const uint *live,
                           global const pm_knn_result *results, global uint *next)

@@ -1,9 +1,11 @@
 /* The uniform point grid built on the device (apps/render/point_grid.c;
  * Purcell 6.2.2). sr_program_create prepends rt_types.h and pg_types.h, so
- * pg_cell is the host reference's arithmetic, bit for bit.
+ * pg_cell and pg_hash_point are the host reference's arithmetic, bit for
+ * bit.
  *
  * All kernels are generators (sluice_kernel_launch_count) over points or
- * cells, except pg_place, which runs over the stream of overfull points. */
+ * cells (buckets, in the hashed layout of Purcell 6.4.4), except pg_place,
+ * which runs over the stream of overfull points. */
 #include "sluice.cl"
 
 /* keys[i] = the cell of point i (g.cells for a non-finite one, counted in
@@ -146,5 +148,20 @@ __kernel void pg_place(SLUICE_PARAMS, global const uint *sub_keys, global const 
         uint c = sub_keys[i], rank = i - sub_start[c];
         if (rank < slots)
             order[(ulong)c * slots + rank] = sub_values[i];
+    }
+}
+
+/* The hashed layout's pg_key (pg_types.h: pg_hash_point): keys[i] = the
+ * bucket of point i (h.buckets for a non-finite one, counted in counter 0),
+ * values[i] = i. */
+__kernel void pg_hash_key(SLUICE_PARAMS, global const float *pts, pg_hash_params h,
+                          global uint *keys, global uint *values)
+{
+    SLUICE_FOR_EACH (i) {
+        ulong b = (ulong)i * h.stride;
+        uint c = pg_hash_point(pts[b], pts[b + 1], pts[b + 2], &h);
+        keys[i] = c;
+        values[i] = i;
+        SLUICE_COUNT(0, c == h.buckets);
     }
 }
