@@ -289,12 +289,14 @@ def mitsuba_import():
     return None, "; ".join(why)
 
 
-def run_mitsuba(mi, scene, scene_exe, size, spps, build, ref, tmp, chunk=64):
+def run_mitsuba(mi, scene, scene_exe, size, spps, build, ref, tmp, chunk=64, again_below=2.0):
     """Mitsuba 3's path tracer at each spp, timed: mi.render() until the
     image is in host memory. Past `chunk` spp the render is the mean of
     passes of `chunk` spp with other seeds (the llvm variants trace all of a
     render's samples as one wavefront, 19,200 pixels x 4,096 spp would not
-    fit in memory). Warm-up renders first compile the kernels."""
+    fit in memory). Warm-up renders first compile the kernels. As for
+    Sluice, a render under `again_below` seconds is timed twice (the same
+    seeds: the same image) and the shorter time kept."""
     import numpy as np
     xml_dir = os.path.join(tmp, scene + "-mitsuba")
     subprocess.run([scene_exe, scene, "--export-mitsuba", xml_dir], check=True,
@@ -308,13 +310,16 @@ def run_mitsuba(mi, scene, scene_exe, size, spps, build, ref, tmp, chunk=64):
     points = []
     for spp in spps:
         passes = max(1, spp // chunk)
-        t0 = time.perf_counter()
-        acc = None
-        for i in range(passes):
-            arr = np.array(mi.render(sc, spp=min(spp, chunk), seed=1 + i))
-            acc = arr if acc is None else acc + arr
-        acc /= passes
-        t = time.perf_counter() - t0
+        t = None
+        while t is None or (t < again_below and not again):
+            again = t is not None  # a second render under again_below s: the same image
+            t0 = time.perf_counter()
+            acc = None
+            for i in range(passes):
+                arr = np.array(mi.render(sc, spp=min(spp, chunk), seed=1 + i))
+                acc = arr if acc is None else acc + arr
+            acc /= passes
+            t = min(t, time.perf_counter() - t0) if again else time.perf_counter() - t0
         mi.util.write_bitmap(img, acc[:, :, :3], write_async=False)
         rel, rmse = imgdiff(build, img, ref)
         points.append({"seconds": t, "relmse": rel, "rmse": rmse,
@@ -339,7 +344,7 @@ def pov_seconds(log, name):
     return float(m.group(1)) if m else 0.0
 
 
-def run_povray(scene, scene_exe, size, steps, build, ref, tmp):
+def run_povray(scene, scene_exe, size, steps, build, ref, tmp, again_below=2.0):
     """POV-Ray's photon mapping at growing effort: each step (photon count,
     area-light samples per side, antialiasing depth); the time is photon +
     trace time as POV-Ray reports them (parsing left out), the wall time of
@@ -359,16 +364,25 @@ def run_povray(scene, scene_exe, size, steps, build, ref, tmp):
         # antialiasing: every pixel supersampled (threshold 0), method 1, jittered
         opts = ["-D", "+W%d" % w, "+H%d" % h, "+FE", "+O" + img, "+A0.0", "+AM1",
                 "+R%d" % aa, "+J"]
-        t0 = time.perf_counter()
-        out = subprocess.run(["povray"] + opts + [pov], capture_output=True, text=True,
-                             env=dict(os.environ, HOME=tmp))
-        wall = time.perf_counter() - t0
-        if out.returncode != 0:
-            raise RuntimeError("povray failed: " + out.stderr[-2000:])
+        best = None
+        for attempt in range(2):  # a render under again_below s: twice, the faster kept
+            t0 = time.perf_counter()
+            out = subprocess.run(["povray"] + opts + [pov], capture_output=True, text=True,
+                                 env=dict(os.environ, HOME=tmp))
+            wall = time.perf_counter() - t0
+            if out.returncode != 0:
+                raise RuntimeError("povray failed: " + out.stderr[-2000:])
+            log = out.stdout + out.stderr
+            t = pov_seconds(log, "Photon") + pov_seconds(log, "Trace")
+            if best is None or t < best[0]:
+                best = (t, wall, log)
+                shutil.copyfile(img, img + ".best.exr")
+            if i == 0 or t >= again_below:
+                break
         if i == 0:
             continue
-        log = out.stdout + out.stderr
-        t = pov_seconds(log, "Photon") + pov_seconds(log, "Trace")
+        t, wall, log = best
+        shutil.copyfile(img + ".best.exr", img)
         stored = re.search(r"Surface photons stored:\s+(\d+)", log)
         shot = re.search(r"Number of photons shot:\s+(\d+)", log)
         spp = re.search(r"Smpls/Pxl:\s+([\d.]+)", log)
@@ -483,10 +497,11 @@ def plot(res, scene, path):
                    label="reference noise floor")
     ax.set_xlabel("seconds (render only)")
     ax.set_ylabel("relMSE against the reference")
-    ax.set_title("%s %s, reference: %s %d spp x %d seeds\n%s, %d cores" %
-                 (scene, g["size"], "PPM" if g["reference"]["kind"] == "ppm" else "path traced",
-                  g["reference"]["spp"], len(g["reference"]["seeds"]), res["cpu"],
-                  res["cores"]), fontsize=8)
+    la = res.get("load_average_at_start")
+    ax.set_title("%s %s, reference: %s %d spp x %d seeds\n%s, %d cores, load %s at the start, %s"
+                 % (scene, g["size"], "PPM" if g["reference"]["kind"] == "ppm" else "path traced",
+                    g["reference"]["spp"], len(g["reference"]["seeds"]), res["cpu"],
+                    res["cores"], "%.1f" % la[0] if la else "?", res["date"][:10]), fontsize=8)
     ax.grid(True, which="major", linewidth=0.4, alpha=0.5)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
