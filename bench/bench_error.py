@@ -10,6 +10,8 @@ a few relMSE levels. Methods, per scene (cornell, glassball, ring):
                    photons and a smaller radius each): a slope is fitted to
                    log relMSE against log seconds (Knaus and Zwicker: MSE ~
                    N^(-2/3))
+  path-fast,       the same with --exec fused (and --shells-per-pass all):
+  ppm-fast         the same images, faster
   pm-MAP-kK        sluice-photonmap, one sample, photon map built by MAP
                    (count, bitonic sort or stencil routing), Purcell's
                    at-least-k search, more photons each step (bias and noise
@@ -216,6 +218,10 @@ def sluice_methods(scene, build, quick):
                    "--spp", str(1 << i)] for i in range(n_path)],
          "ppm": [[pm, "--progressive", "--photons", str(photons), "--spp", str(1 << i)]
                  for i in range(n_ppm)]}
+    # the same images, faster (bench_photonmap.py's "fast"): the fused
+    # tracer, and each kNN search to its end in one pass
+    m["path-fast"] = [c + ["--exec", "fused"] for c in m["path"]]
+    m["ppm-fast"] = [c + ["--exec", "fused", "--shells-per-pass", "all"] for c in m["ppm"]]
     for mp in (MAPS[:1] if quick else MAPS):
         for k in PM_K[scene]:
             m["pm-%s-k%d" % (mp, k)] = [[pm, "--map", mp, "--k", str(k), "--photons",
@@ -409,14 +415,17 @@ def analyse(res_scene):
         pts = [(p["seconds"], p["relmse"]) for p in m["points"]]
         m["seconds_to_relmse"] = {str(l): time_to(pts, l) for l in LEVELS}
         m["best_relmse"] = min(e for _, e in pts) if pts else None
-    ppm = res_scene["methods"].get("ppm")
-    if ppm and len(ppm["points"]) >= 4:
+    res_scene["ppm_slope"] = {}
+    for name in ("ppm", "ppm-fast"):
+        ppm = res_scene["methods"].get(name)
+        if not ppm or len(ppm["points"]) < 4:
+            continue
         # fitted from 4 samples on (the first are dominated by the fixed
         # costs of a sample and by r_0)
-        pts = [p for p in ppm["points"] if int(p["args"].split("--spp ")[1]) >= 4]
+        pts = [p for p in ppm["points"] if int(p["args"].split("--spp ")[1].split()[0]) >= 4]
         secs = [p["seconds"] for p in pts]
         rel = [p["relmse"] for p in pts]
-        spp = [int(p["args"].split("--spp ")[1]) for p in pts]
+        spp = [int(p["args"].split("--spp ")[1].split()[0]) for p in pts]
         st, _ = fit_slope(secs, rel)
         sn, _ = fit_slope(spp, rel)
         above = [(t, e - floor, n) for t, e, n in zip(secs, rel, spp) if e > 2 * floor]
@@ -428,7 +437,7 @@ def analyse(res_scene):
             fit["slope_vs_samples_floor_removed"] = fit_slope([a[2] for a in above],
                                                               [a[1] for a in above])[0]
             fit["floor_removed_points"] = len(above)
-        res_scene["ppm_slope"] = fit
+        res_scene["ppm_slope"][name] = fit
 
 
 def goal(res):
@@ -442,7 +451,7 @@ def goal(res):
     mit10 = error_at(mpts, 10.0)
     best1, best_name = None, None
     for name, m in g["methods"].items():
-        if not (name == "ppm" or name.startswith("pm-")) or not m["points"]:
+        if not (name.startswith("ppm") or name.startswith("pm-")) or not m["points"]:
             continue
         e = error_at([(p["seconds"], p["relmse"]) for p in m["points"]], 1.0)
         if e is None and min(p["seconds"] for p in m["points"]) > 1.0:
@@ -457,7 +466,7 @@ def goal(res):
     keeps = all(b < a for a, b in zip(rels, rels[1:]))
     mit_best = min(e for _, e in mpts)
     others = [m["best_relmse"] for n, m in g["methods"].items()
-              if n != "ppm" and m["best_relmse"] is not None]
+              if not n.startswith("ppm") and m["best_relmse"] is not None]
     return {"mitsuba_relmse_at_10s": mit10, "mitsuba_max_seconds": max(t for t, _ in mpts),
             "sluice_pm_best_relmse_at_1s": best1, "sluice_pm_best_method_at_1s": best_name,
             "part1_holds": (mit10 is not None and best1 is not None and best1 <= mit10),
@@ -478,6 +487,7 @@ def plot(res, scene, path):
     g = res["scenes"][scene]
     fig, ax = plt.subplots(figsize=(7, 4.6))
     style = {"path": ("C0", "o", "-"), "ppm": ("C3", "s", "-"),
+             "path-fast": ("C0", "o", "--"), "ppm-fast": ("C3", "s", "--"),
              "mitsuba-path": ("C2", "^", "-"), "povray-photons": ("C4", "D", "-")}
     mapstyle = {"count": "-", "bitonic": "--", "stencil": ":"}
     kcol = {}
@@ -599,10 +609,9 @@ def main():
             print("%-18s" % name + "".join("%9s" % fmt_t(m["seconds_to_relmse"][str(l)])
                                            for l in LEVELS) + "   %s" % fmt_t(m["best_relmse"])
                   + ("   (refused: %s)" % m["refused"]["args"] if "refused" in m else ""))
-        if "ppm_slope" in g:
-            s = g["ppm_slope"]
-            print("ppm slope of log relMSE: %.3f against log seconds, %.3f against log samples"
-                  " (theory -2/3)%s" % (s["slope_vs_seconds"], s["slope_vs_samples"],
+        for name, s in g.get("ppm_slope", {}).items():
+            print("%s slope of log relMSE: %.3f against log seconds, %.3f against log samples"
+                  " (theory -2/3)%s" % (name, s["slope_vs_seconds"], s["slope_vs_samples"],
                                         "; floor removed: %.3f / %.3f" %
                                         (s["slope_vs_seconds_floor_removed"],
                                          s["slope_vs_samples_floor_removed"])
