@@ -20,11 +20,13 @@ a few relMSE levels. Methods, per scene (cornell, glassball, ring):
                    scalar_rgb) on `sluice-scene --export-mitsuba`, 1, 2, 4,
                    ... spp, in this process, in the same run
   povray-photons   POV-Ray 3.7 with photon-mapped caustics on the scene
-                   converted by bench/pov_export.py (glassball only by
-                   default, and ring), more photons each step
+                   converted by bench/pov_export.py (glassball and ring),
+                   more photons, area-light samples and antialiasing each
+                   step
 
   bench/bench_error.py [--scene S ...] [--build build] [--out bench/results/error.json]
                        [--plots bench/results] [--quick] [--no-mitsuba] [--no-povray]
+                       [--povray-scene S ...] [--ref-seeds N]
 
 Run it with bench/.venv/bin/python (tools/install-mitsuba.sh makes it) for
 the Mitsuba figures and the plots; with a Python without Mitsuba or
@@ -32,9 +34,9 @@ matplotlib those are left out and the file says so.
 
 The reference of a scene is the mean of its references' seeds
 (bench/references/SCENE-sluice[-ppm]-sSEED.exr, all that are there, at
-least seeds 1 .. REF_SEEDS: rendered first when missing): the path-traced ones, except
-ring, whose caustic no path tracer samples (a point light seen in a
-mirror), judged against a long progressive photon-mapping render. What is
+least seeds 1 .. REF_SEEDS: rendered first when missing): the path-traced
+ones, except ring, whose caustics no path tracer samples (a point light
+seen in a mirror), judged against a long progressive photon-mapping render. What is
 left of the references' own noise adds to every relMSE measured against
 them: the file records that floor (the relMSE between two seeds over 2n for
 a mean of n seeds), and levels near it say little.
@@ -43,7 +45,8 @@ Every time is the render's own, without start-up and program or scene
 set-up: Sluice's `phases.total` / `seconds` (after a warm-up run that fills
 PoCL's kernel cache), Mitsuba's mi.render() until the image is in memory
 (after a warm-up render that compiles its kernels), POV-Ray's photon and
-trace times as it reports them (parsing left out). The metric is
+trace times as it reports them (parsing left out). A render under 2 s is
+timed twice and the shorter time kept. The metric is
 sluice-imgdiff's relMSE, mean over pixels and channels of (a - b)^2 / (b^2
 + 0.01), b the reference, for every renderer alike.
 
@@ -316,7 +319,7 @@ def run_mitsuba(mi, scene, scene_exe, size, spps, build, ref, tmp, chunk=64, aga
     points = []
     for spp in spps:
         passes = max(1, spp // chunk)
-        t = None
+        t, again = None, False
         while t is None or (t < again_below and not again):
             again = t is not None  # a second render under again_below s: the same image
             t0 = time.perf_counter()
