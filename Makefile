@@ -1,8 +1,11 @@
 # Sluice: the two commands of the README's Quick start, and a few more.
 #   make demo   install what is missing, build, run the demo
 #   make test   install what is missing, build, run the whole suite (ctest)
-#   make bench  install the benchmarks' peers (Embree), run the benchmarks
-#               (bench/results/streams.json, raytrace.json, knn.json, photonmap.json)
+#   make bench  install the benchmarks' peers (Embree, POV-Ray, Mitsuba 3 and
+#               matplotlib in bench/.venv), run the benchmarks (bench/results/
+#               streams.json, raytrace.json, knn.json, photonmap.json, error.json)
+#   make bench-error  only run time against error (bench/bench_error.py:
+#               references, Mitsuba 3, POV-Ray; error.json, error-SCENE.png)
 #   make references  converged path-traced references of cornell, glassball
 #               and ring (bench/references/, git-ignored; bench/references.py)
 #   make mitsuba-agreement  install Mitsuba 3 into bench/.venv, render the
@@ -16,7 +19,7 @@ BUILD ?= build
 ASAN_BUILD ?= build-asan
 MESON_FLAGS ?=
 
-.PHONY: all deps build demo test bench references mitsuba-agreement asan sweep fuzz install clean
+.PHONY: all deps build demo test bench bench-error references mitsuba-agreement asan sweep fuzz install clean
 
 all: build
 
@@ -45,6 +48,16 @@ bench:
 	$(BUILD)/bench/bench_raytrace --out bench/results/raytrace.json
 	$(BUILD)/bench/bench_knn --out bench/results/knn.json
 	python3 bench/bench_photonmap.py --exe $(BUILD)/apps/photonmap/sluice-photonmap --out bench/results/photonmap.json
+	$(MAKE) bench-error
+
+# Run time against error (issue 13): Sluice's methods, Mitsuba 3 and POV-Ray
+# against the references (rendered first when missing: several minutes).
+bench-error:
+	sh tools/install-deps.sh --bench
+	sh tools/install-mitsuba.sh
+	$(MAKE) build
+	POCL_CACHE_DIR=$${POCL_CACHE_DIR:-$(CURDIR)/$(BUILD)/pocl-cache} nice bench/.venv/bin/python \
+	    bench/bench_error.py --build $(BUILD) --out bench/results/error.json
 
 references: build
 	POCL_CACHE_DIR=$${POCL_CACHE_DIR:-$(CURDIR)/$(BUILD)/pocl-cache} python3 bench/references.py \

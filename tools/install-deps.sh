@@ -2,7 +2,8 @@
 # Installs the Debian 12 packages Sluice needs, only when some are missing.
 # Idempotent; uses sudo when not run as root.
 #   --bench   also the benchmarks' optional peers (libembree-dev, for
-#             bench_raytrace's Embree comparison)
+#             bench_raytrace's Embree comparison; povray, for
+#             bench/bench_error.py's POV-Ray photon mapping)
 set -eu
 BENCH=0
 for arg in "$@"; do
@@ -16,7 +17,7 @@ ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo
 libopenimageio-dev openimageio-tools libassimp-dev libcjson-dev libflann-dev
 glmark2-data"
 if [ "$BENCH" = 1 ]; then
-    PKGS="$PKGS libembree-dev"
+    PKGS="$PKGS libembree-dev povray"
 fi
 missing=""
 for p in $PKGS; do
