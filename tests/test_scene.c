@@ -1312,6 +1312,10 @@ static void test_cli_export(const char *exe)
                   strstr(out, "fov_axis") && strstr(out, "<rfilter type=\"box\"/>") &&
                   strstr(out, "name=\"max_depth\" value=\"7\""),
               "%s:\n%s", path, out);
+        /* well-formed XML: no "--" inside a comment */
+        const char *c0 = strstr(out, "<!--"), *c1 = c0 ? strstr(c0 + 4, "-->") : NULL;
+        const char *dd = c0 ? strstr(c0 + 4, "--") : NULL;
+        CHECK(c0 && c1 && dd == c1, "%s: \"--\" inside the comment", path);
         if (i == 0)
             CHECK(strstr(out, "type=\"dielectric\"") && strstr(out, "int_ior\" value=\"1.5\"") &&
                       strstr(out, "<emitter type=\"area\"><rgb name=\"radiance\" value=\"25, "),

@@ -380,13 +380,19 @@ static int export_mitsuba(const sr_scene *s, const char *dir)
     const sr_render_settings *r = sr_scene_render_settings(s);
     const sr_material *m = sr_scene_materials(s);
     size_t nm = sr_scene_material_count(s), nv = sr_scene_vertex_count(s);
-    fprintf(f,
-            "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
-            "<!-- Written by sluice-scene --export-mitsuba from %s. Units and conventions\n"
-            "     as in Sluice: linear RGB, radiance; area lights emit from the front\n"
-            "     (counter-clockwise) side only; a Sluice path of max depth D has at most\n"
-            "     D + 1 scattering vertices, D + 2 segments: Mitsuba's max_depth. -->\n",
-            sr_scene_source(s));
+    /* XML comments may not hold "--" (nor end in "-"): the scene's name is
+     * written with a space after every '-' that a '-' or the end follows. */
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
+               "<!-- Written by sluice-scene (Mitsuba export) from ");
+    for (const char *c = sr_scene_source(s); *c; ++c) {
+        fputc(*c, f);
+        if (*c == '-' && (c[1] == '-' || c[1] == '\0'))
+            fputc(' ', f);
+    }
+    fprintf(f, ". Units and conventions\n"
+               "     as in Sluice: linear RGB, radiance; area lights emit from the front\n"
+               "     (counter-clockwise) side only; a Sluice path of max depth D has at most\n"
+               "     D + 1 scattering vertices, D + 2 segments: Mitsuba's max_depth. -->\n");
     fprintf(f, "<scene version=\"3.0.0\">\n");
     fprintf(f, "    <default name=\"spp\" value=\"%u\"/>\n", r->samples_per_pixel);
     fprintf(f, "    <default name=\"max_depth\" value=\"%u\"/>\n", r->max_depth + 2u);
