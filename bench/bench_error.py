@@ -511,9 +511,10 @@ def plot(res, scene, path):
     ax.set_xlabel("seconds (render only)")
     ax.set_ylabel("relMSE against the reference")
     la = res.get("load_average_at_start")
-    ax.set_title("%s %s, reference: %s %d spp x %d seeds\n%s, %d cores, load %s at the start, %s"
-                 % (scene, g["size"], "PPM" if g["reference"]["kind"] == "ppm" else "path traced",
-                    g["reference"]["spp"], len(g["reference"]["seeds"]), res["cpu"],
+    ppm_ref = g["reference"]["kind"] == "ppm"
+    ax.set_title("%s %s, reference: %s %d %s x %d seeds\n%s, %d cores, load %s at the start, %s"
+                 % (scene, g["size"], "PPM" if ppm_ref else "path traced",
+                    g["reference"]["spp"], "samples" if ppm_ref else "spp", len(g["reference"]["seeds"]), res["cpu"],
                     res["cores"], "%.1f" % la[0] if la else "?", res["date"][:10]), fontsize=8)
     ax.grid(True, which="major", linewidth=0.4, alpha=0.5)
     ax.legend(fontsize=7, ncol=2)
