@@ -12,6 +12,8 @@ a few relMSE levels. Methods, per scene (cornell, glassball, ring):
                    N^(-2/3))
   path-fast,       the same with --exec fused (and --shells-per-pass all):
   ppm-fast         the same images, faster
+  ppm-fast-2x      glassball: ppm-fast with twice the photons a pass (half the
+                   eye passes for the same photons)
   pm-MAP-kK        sluice-photonmap, one sample, photon map built by MAP
                    (count, bitonic sort or stencil routing), Purcell's
                    at-least-k search, more photons each step (bias and noise
@@ -225,6 +227,14 @@ def sluice_methods(scene, build, quick):
     # tracer, and each kNN search to its end in one pass
     m["path-fast"] = [c + ["--exec", "fused"] for c in m["path"]]
     m["ppm-fast"] = [c + ["--exec", "fused", "--shells-per-pass", "all"] for c in m["ppm"]]
+    if scene == "glassball":
+        # twice the photons a pass, half the passes: the same photons for
+        # half the eye passes (on glassball at 160x120 a pass's eye rays
+        # cost as much as 5,000 photons: 10,000 x 16 took 1.07-1.36 s where
+        # 5,000 x 32 took 1.51-1.61 s, at the same relMSE against one seed)
+        m["ppm-fast-2x"] = [[pm, "--progressive", "--photons", str(2 * photons), "--spp",
+                             str(1 << i), "--exec", "fused", "--shells-per-pass", "all"]
+                            for i in range(n_ppm - 1)]
     for mp in (MAPS[:1] if quick else MAPS):
         for k in PM_K[scene]:
             m["pm-%s-k%d" % (mp, k)] = [[pm, "--map", mp, "--k", str(k), "--photons",
@@ -419,7 +429,7 @@ def analyse(res_scene):
         m["seconds_to_relmse"] = {str(l): time_to(pts, l) for l in LEVELS}
         m["best_relmse"] = min(e for _, e in pts) if pts else None
     res_scene["ppm_slope"] = {}
-    for name in ("ppm", "ppm-fast"):
+    for name in ("ppm", "ppm-fast", "ppm-fast-2x"):
         ppm = res_scene["methods"].get(name)
         if not ppm or len(ppm["points"]) < 4:
             continue
@@ -491,6 +501,7 @@ def plot(res, scene, path):
     fig, ax = plt.subplots(figsize=(7, 4.6))
     style = {"path": ("C0", "o", "-"), "ppm": ("C3", "s", "-"),
              "path-fast": ("C0", "o", "--"), "ppm-fast": ("C3", "s", "--"),
+             "ppm-fast-2x": ("C1", "s", ":"),
              "mitsuba-path": ("C2", "^", "-"), "povray-photons": ("C4", "D", "-")}
     mapstyle = {"count": "-", "bitonic": "--", "stencil": ":"}
     kcol = {}
