@@ -194,6 +194,27 @@ static inline void pm_index(pm_state *st, const pm_knn_params *p, global const f
         st->flags |= PM_KNN_INDICES_CUT;
 }
 
+/* Takes the photons of block map[j .. j + PM_MAP_BLOCK) selected by m, in
+ * order: lists them (pm_index), adds their power to the lane sums and counts
+ * them. Shared by the dense and the hashed scans. */
+static inline void pm_take8(pm_state *st, const pm_knn_params *p, global const float *map, uint j,
+                            int8 m, float8 *ar, float8 *ag, float8 *ab, global uint *indices)
+{
+    uint stride = p->map_stride;
+    if (p->index_cap) {
+        int mm[PM_MAP_BLOCK];
+        vstore8(m, 0, mm);
+        uint c = st->count;
+        for (int l = 0; l < PM_MAP_BLOCK; ++l)
+            if (mm[l])
+                pm_index(st, p, map, j + (uint)l, c++, indices);
+    }
+    *ar += select((float8)(0.0f), vload8(0, map + PM_MAP_R * stride + j), m);
+    *ag += select((float8)(0.0f), vload8(0, map + PM_MAP_G * stride + j), m);
+    *ab += select((float8)(0.0f), vload8(0, map + PM_MAP_B * stride + j), m);
+    st->count += (uint)(-pm_hsum8i(m));
+}
+
 /* Runs shorter than this are examined one photon at a time: a block's setup
  * and sums cost more than it saves there (glassball, with Purcell's
  * 250x1x250 grid: runs of one cell of a few photons; measured). */
@@ -295,18 +316,7 @@ static inline void pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params
                 m = vload8(0, mm);
             }
         }
-        if (p->index_cap) {
-            int mm[PM_MAP_BLOCK];
-            vstore8(m, 0, mm);
-            uint c = st->count;
-            for (int l = 0; l < PM_MAP_BLOCK; ++l)
-                if (mm[l])
-                    pm_index(st, p, map, j + (uint)l, c++, indices);
-        }
-        ar += select((float8)(0.0f), vload8(0, map + PM_MAP_R * stride + j), m);
-        ag += select((float8)(0.0f), vload8(0, map + PM_MAP_G * stride + j), m);
-        ab += select((float8)(0.0f), vload8(0, map + PM_MAP_B * stride + j), m);
-        st->count += (uint)(-pm_hsum8i(m));
+        pm_take8(st, p, map, j, m, &ar, &ag, &ab, indices);
     }
     st->sr += pm_hsum8(ar);
     st->sg += pm_hsum8(ag);
@@ -652,18 +662,7 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
         if (!any(m))
             continue;
         st->r2 = fmax(st->r2, pm_hmax8(select((float8)(0.0f), d2, m)));
-        if (p->index_cap) {
-            int mm[PM_MAP_BLOCK];
-            vstore8(m, 0, mm);
-            uint k = st->count;
-            for (int l = 0; l < PM_MAP_BLOCK; ++l)
-                if (mm[l])
-                    pm_index(st, p, map, j + (uint)l, k++, indices);
-        }
-        ar += select((float8)(0.0f), vload8(0, map + PM_MAP_R * stride + j), m);
-        ag += select((float8)(0.0f), vload8(0, map + PM_MAP_G * stride + j), m);
-        ab += select((float8)(0.0f), vload8(0, map + PM_MAP_B * stride + j), m);
-        st->count += (uint)(-pm_hsum8i(m));
+        pm_take8(st, p, map, j, m, &ar, &ag, &ab, indices);
     }
     st->sr += pm_hsum8(ar);
     st->sg += pm_hsum8(ag);
