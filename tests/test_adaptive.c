@@ -26,7 +26,7 @@
 #include "adaptive.h"
 #include "check.h"
 #include "film.h"
-#include "film_program.h"
+#include "test_program.h"
 #include "furnace.h"
 #include "image.h"
 #include "image_metrics.h"

@@ -35,7 +35,7 @@
  */
 #include "check.h"
 #include "film.h"
-#include "film_program.h"
+#include "test_program.h"
 #include "furnace.h"
 #include "image.h"
 #include "image_metrics.h"
@@ -216,7 +216,7 @@ static void test_furnace_knn(void)
     size_t n = 0;
     pm_photon_stats ps;
     memset(&ps, 0, sizeof ps);
-    pm_photon_options po = {60000, 64, 3};
+    pm_photon_options po = {60000, 64, 3, 0};
     if (st == SLUICE_OK)
         st = pm_photons_trace(ph, &po, &photons, &n, &ps);
     CHECK(st == SLUICE_OK && n >= 60000, "furnace photons: %zu stored (%s)", n,

@@ -420,7 +420,7 @@ static sluice_status photon_knn_radius(pm_renderer *r, float max_radius, float *
  * map; the phases' times and the photon counts add up over calls. */
 static sluice_status trace_and_build(pm_renderer *r, uint32_t seed, char *err, size_t err_size)
 {
-    pm_photon_options po = {r->opt.photons, r->opt.max_depth, seed};
+    pm_photon_options po = {r->opt.photons, r->opt.max_depth, seed, 0};
     pm_photon_stats before = r->stats.photons;
     sluice_status st = pm_photons_trace(r->photons, &po, &r->map, &r->map_count, &r->stats.photons);
     if (r->stats.samples > 0) {

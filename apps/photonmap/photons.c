@@ -38,6 +38,7 @@ struct pm_photons {
     float area_prob; /* share of the photons that leave area lights */
     int specular;    /* the scene has mirrors or glass */
     float spec[4];   /* their bounding sphere: centre, radius */
+    double yield;    /* stored per emitted in the last trace (0: none yet) */
 };
 
 /* Share of a point light's photons sent toward the mirrors and glass when
@@ -211,7 +212,10 @@ static sluice_status emit(pm_photons *p, const pm_photon_options *opt, uint32_t 
     a.area_prob = p->area_prob;
     a.area_total = (float)ds->area_total;
     a.scene_eps = ds->scene_eps;
-    a.spec_prob = p->specular ? PM_SPECULAR_SHARE : 0.0f;
+    /* the batch's first photons go toward the mirrors and glass (pm_emit) */
+    a.cone_count =
+        p->specular && !opt->no_projection ? (rt_u32)((double)n * PM_SPECULAR_SHARE + 0.5) : 0u;
+    a.spec_prob = (float)((double)a.cone_count / (double)n);
     a.spec_x = p->spec[0];
     a.spec_y = p->spec[1];
     a.spec_z = p->spec[2];
@@ -304,12 +308,16 @@ sluice_status pm_photons_trace(pm_photons *p, const pm_photon_options *opt, slui
         stats->seconds = sr_clock_seconds() - t0;
         return st;
     }
-    /* Emit in batches until enough are stored: the first batch is the
-     * target, the next ones are sized by the share stored so far. */
+    /* Emit in batches until enough are stored, each sized by the share
+     * stored so far; the first by the last trace's share (progressive
+     * passes trace the same scene again and again: one batch each, not a
+     * guess and a top-up), or the target itself on the first trace. */
     uint64_t limit = 256ull * opt->target + (1u << 20);
     size_t stored = 0;
     while (st == SLUICE_OK && stored < opt->target && stats->emitted < limit) {
-        double share = stats->emitted ? (double)stored / (double)stats->emitted : 1.0;
+        double share = stats->emitted   ? (double)stored / (double)stats->emitted
+                       : p->yield > 0.0 ? p->yield
+                                        : 1.0;
         double want = (double)(opt->target - stored) / (share > 0.01 ? share : 0.01) * 1.05;
         size_t n = want > (double)PM_BATCH_MAX ? PM_BATCH_MAX : (size_t)want + 1;
         if (n < 1024)
@@ -339,6 +347,8 @@ sluice_status pm_photons_trace(pm_photons *p, const pm_photon_options *opt, slui
         if (st == SLUICE_OK)
             st = sluice_stream_length(p->stored, &stored);
     }
+    if (st == SLUICE_OK && stored)
+        p->yield = (double)stored / (double)stats->emitted;
     if (st == SLUICE_OK)
         st = rt_tracer_collect_maxima(p->tracer);
     /* flux per photon: divide by all photons emitted (Jensen 2001, 5.1) */

@@ -24,6 +24,9 @@ typedef struct pm_photon_options {
     uint32_t target;    /**< photons to store (at least; the last batch may add a few) */
     unsigned max_depth; /**< most bounces of a photon (0: stored nowhere) */
     uint32_t seed;
+    int no_projection; /**< 1: every photon leaves as its light emits, none
+                            sent toward the mirrors and glass (Jensen's
+                            projection map off; for tests and comparisons) */
 } pm_photon_options;
 
 /** What tracing did (the statistics of Purcell's "trace photons" phase). */

@@ -28,36 +28,51 @@
  * cosine-weighted direction about its normal or one toward the mirrors and
  * glass: flux Le cos A / (p_area pdf), Le pi A / p_area without them) or a
  * point light (a uniform direction or one toward the mirrors and glass:
- * flux I n_point / ((1 - p_area) pdf)). */
+ * flux I n_point / ((1 - p_area) pdf)).
+ *
+ * Jensen's projection map, as a mixture: the batch's first `cone_count`
+ * photons go into the cone from the emission point to the mirrors' and
+ * glass's bounding sphere (where caustics start), the rest as the light
+ * emits. The share is fixed, not drawn, and the power divides by the
+ * mixture's pdf with that share: Veach's multi-sample model with the
+ * balance heuristic (thesis 9.2), unbiased, without the noise of drawing
+ * each photon's strategy. A point inside the sphere, or an area light whose
+ * front cannot see it, emits as the light does.
+ *
+ * Emission points and directions are quasi-random: each an Owen-scrambled
+ * Sobol 2D sequence over the batch (directions one per strategy), keyed by
+ * the batch, so the photons of a pass cover the lights and the cone evenly
+ * where independent ones would clump (Keller's quasi-Monte Carlo photon
+ * tracing; the scrambles keep every photon uniform, so nothing is biased). */
 __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv,
                       global const uint *tri_mat, global const rt_material *mats,
                       global const rt_point_light *plights, global const uint *area_tris,
                       global const float *area_cdf, const pm_emit_args a)
 {
+    uint bkey = rt_key(rt_key(a.seed, 0x5eb0u), a.base);
     SLUICE_FOR_EACH (i) {
         uint key = rt_key(rt_key(a.seed, 0x9407u), a.base + i);
+        int cone_range = i < a.cone_count;
+        uint j = cone_range ? i : i - a.cone_count; /* index in its strategy's sequence */
+        float2 up = rt_sobol2(rt_owen(i, rt_key(bkey, 1u)), rt_key(bkey, 2u));
+        float2 ud = rt_sobol2(rt_owen(j, rt_key(bkey, cone_range ? 3u : 4u)),
+                              rt_key(bkey, cone_range ? 5u : 6u));
         float3 o, d, power;
         float3 off;
-        /* Jensen's projection map, as a mixture: a share of the photons go
-         * into the cone from the emission point to the mirrors' and glass's
-         * bounding sphere (where caustics start), the rest as the light
-         * emits; the power divides by the mixture's pdf, so nothing is lost
-         * or counted twice. A point inside the sphere emits as the light
-         * does. */
         float3 to;
         float ps = 0.0f, omc = 0.0f;
         int area = a.area_lights && rt_rand(key, 0u) < a.area_prob;
         float3 ln = (float3)(0.0f), le;
         if (area) {
             float3 q;
-            uint lt = rt_area_light_sample(rt_rand(key, 1u), rt_rand(key, 2u), rt_rand(key, 3u),
-                                           a.area_lights, area_tris, area_cdf, tv, &q, &ln);
+            uint lt = rt_area_light_sample(up.x, up.y, a.area_lights, area_tris, area_cdf, tv, &q,
+                                           &ln);
             rt_material m = mats[tri_mat[lt]];
             le = (float3)(m.er, m.eg, m.eb);
             o = q;
             off = ln * a.scene_eps;
         } else {
-            uint l = min((uint)(rt_rand(key, 1u) * (float)a.point_lights), a.point_lights - 1u);
+            uint l = min((uint)(up.x * (float)a.point_lights), a.point_lights - 1u);
             rt_point_light pl = plights[l];
             o = (float3)(pl.px, pl.py, pl.pz);
             off = (float3)(0.0f);
@@ -74,12 +89,11 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
             ps = !area || dot(axis, ln) > -sqrt(x) ? a.spec_prob : 0.0f;
         }
         int in_cone = 0;
-        if (ps > 0.0f && rt_rand(key, 4u) < ps) {
-            d = rt_cone_dir(axis, omc, rt_rand(key, 5u), rt_rand(key, 6u));
+        if (ps > 0.0f && cone_range) {
+            d = rt_cone_dir(axis, omc, ud.x, ud.y);
             in_cone = 1;
         } else {
-            d = area ? rt_cosine_dir(ln, rt_rand(key, 5u), rt_rand(key, 6u))
-                     : rt_uniform_sphere(rt_rand(key, 5u), rt_rand(key, 6u));
+            d = area ? rt_cosine_dir(ln, ud.x, ud.y) : rt_uniform_sphere(ud.x, ud.y);
             in_cone = ps > 0.0f && dot(d, axis) >= 1.0f - omc;
         }
         float cone_pdf = in_cone ? ps / (2.0f * RT_PI * omc) : 0.0f;

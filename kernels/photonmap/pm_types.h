@@ -101,8 +101,9 @@ typedef struct pm_emit_args {
     float area_prob;  /* probability of leaving an area light */
     float area_total; /* total emissive area */
     float scene_eps;
-    float spec_prob;              /* share of the photons sent
-                                     toward the mirrors and glass */
+    float spec_prob;              /* share of the photons sent toward
+                                     the mirrors and glass: cone_count / n */
+    rt_u32 cone_count;            /* the batch's first photons, sent there */
     float spec_x, spec_y, spec_z; /* their bounding sphere: centre */
     float spec_r;                 /* and radius */
 } pm_emit_args;

@@ -80,12 +80,11 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
         }
         uint nl = (lit && f.area_lights) ? f.light_samples : 0u;
         for (uint k = 0u; k < nl; ++k) {
-            /* pick an emissive triangle by area, then a uniform point on it */
-            float u0 = rt_rand(ray.key, 16u + 3u * k), u1 = rt_rand(ray.key, 17u + 3u * k),
-                  u2 = rt_rand(ray.key, 18u + 3u * k);
+            /* pick an emissive triangle by area, then a uniform point on it;
+             * the hit's samples stratified over the lights together */
+            float2 u = rt_sobol2(k, rt_key(ray.key, 16u));
             float3 q, ln;
-            uint lt =
-                rt_area_light_sample(u0, u1, u2, f.area_lights, area_tris, area_cdf, tv, &q, &ln);
+            uint lt = rt_area_light_sample(u.x, u.y, f.area_lights, area_tris, area_cdf, tv, &q, &ln);
             rt_material lm = mats[tri_mat[lt]];
             float3 L = q - (s.p + off);
             float d2 = dot(L, L), dist = sqrt(d2);

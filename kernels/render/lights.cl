@@ -8,12 +8,15 @@
 #define SR_LIGHTS_CL
 
 /* Picks an emissive triangle with probability proportional to its area (u0)
- * and a uniform point `*q` on it (u1, u2; Shirley and Chiu's square-to-
- * triangle map); writes its unit normal (the emitting side) to `*ln` and
- * returns the triangle. `count` is the number of emissive triangles (> 0). */
-inline uint rt_area_light_sample(float u0, float u1, float u2, uint count,
-                                 global const uint *area_tris, global const float *area_cdf,
-                                 global const float *tv, float3 *q, float3 *ln)
+ * and a uniform point `*q` on it (Shirley and Chiu's square-to-triangle map);
+ * writes its unit normal (the emitting side) to `*ln` and returns the
+ * triangle. `count` is the number of emissive triangles (> 0). The point's
+ * first coordinate is u0 rescaled within the chosen triangle's share of the
+ * CDF, so the map from (u0, u1) to the lights' surface keeps areas: points
+ * stratified in the unit square stay stratified on the lights (rt_sobol2). */
+inline uint rt_area_light_sample(float u0, float u1, uint count, global const uint *area_tris,
+                                 global const float *area_cdf, global const float *tv,
+                                 float3 *q, float3 *ln)
 {
     uint lo = 0u, hi = count - 1u;
     while (lo < hi) {
@@ -23,11 +26,13 @@ inline uint rt_area_light_sample(float u0, float u1, float u2, uint count,
         else
             lo = mid + 1u;
     }
+    float below = lo ? area_cdf[lo - 1u] : 0.0f, width = area_cdf[lo] - below;
+    float ur = width > 0.0f ? clamp((u0 - below) / width, 0.0f, 1.0f) : 0.5f;
     uint lt = area_tris[lo];
     float3 a, e1, e2;
     rt_tri_edges(tv, lt, &a, &e1, &e2);
-    float su = sqrt(u1);
-    *q = a + e1 * (su * (1.0f - u2)) + e2 * (su * u2);
+    float su = sqrt(ur);
+    *q = a + e1 * (su * (1.0f - u1)) + e2 * (su * u1);
     *ln = normalize(cross(e1, e2));
     return lt;
 }

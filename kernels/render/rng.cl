@@ -30,4 +30,51 @@ inline float rt_rand(uint key, uint dim)
     return (float)(rt_key(key, dim) >> 8) * (1.0f / 16777216.0f);
 }
 
+/* The bits of x in reverse order. */
+inline uint rt_reverse_bits(uint x)
+{
+    x = (x << 16) | (x >> 16);
+    x = ((x & 0x00ff00ffu) << 8) | ((x & 0xff00ff00u) >> 8);
+    x = ((x & 0x0f0f0f0fu) << 4) | ((x & 0xf0f0f0f0u) >> 4);
+    x = ((x & 0x33333333u) << 2) | ((x & 0xccccccccu) >> 2);
+    return ((x & 0x55555555u) << 1) | ((x & 0xaaaaaaaau) >> 1);
+}
+
+/* A nested uniform (Owen) scramble of x read as a binary fraction, keyed by
+ * `seed`: each bit is flipped or not by a hash of the bits above it, so an
+ * interval [a 2^-m, (a+1) 2^-m) goes to another of the same size, and a
+ * random seed makes every point uniform while a stratified set stays
+ * stratified. Burley 2020 ("Practical hash-based Owen scrambling", JCGT
+ * 9(4)): on the reversed bits, a hash in which each bit depends only on the
+ * bits below it (an add and multiplies by even constants). */
+inline uint rt_owen(uint x, uint seed)
+{
+    x = rt_reverse_bits(x) + seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return rt_reverse_bits(x);
+}
+
+/* Point k of an Owen-scrambled Sobol (0,2)-sequence keyed by `seed`, in
+ * [0,1)^2: the first two dimensions of Sobol's sequence (van der Corput's
+ * bits of k reversed; then the matrix of Pascal's triangle mod 2), each
+ * scrambled by its own key. Points 0 .. 2^m - 1 put one point in every
+ * elementary interval of area 2^-m; every point alone is uniform, so
+ * averages over them are unbiased (Kollig and Keller 2002). Shuffle k with
+ * rt_owen to draw several independent 2D sequences over the same indices
+ * (Burley 2020, section 4): points whose indices differ below 2^m stay in
+ * different strata. */
+inline float2 rt_sobol2(uint k, uint seed)
+{
+    uint x = rt_reverse_bits(k), y = 0u;
+    for (uint v = 1u << 31; k != 0u; k >>= 1, v ^= v >> 1)
+        if (k & 1u)
+            y ^= v;
+    x = rt_owen(x, rt_hash(seed ^ 0x2545f491u));
+    y = rt_owen(y, rt_hash(seed ^ 0x9e3779b9u));
+    return (float2)((float)(x >> 8), (float)(y >> 8)) * (1.0f / 16777216.0f);
+}
+
 #endif
