@@ -40,21 +40,29 @@ inline uint rt_reverse_bits(uint x)
     return ((x & 0x55555555u) << 1) | ((x & 0xaaaaaaaau) >> 1);
 }
 
+/* The hash of rt_owen on bits already reversed: returns the reversed bits
+ * of the scrambled value. Each bit of the hash depends only on the bits
+ * below it (an add and multiplies by even constants). */
+inline uint rt_owen_reversed_(uint r, uint seed)
+{
+    r += seed;
+    r ^= r * 0x6c50b47cu;
+    r ^= r * 0xb82f1e52u;
+    r ^= r * 0xc7afe638u;
+    r ^= r * 0x8d22f6e6u;
+    return rt_reverse_bits(r);
+}
+
 /* A nested uniform (Owen) scramble of x read as a binary fraction, keyed by
  * `seed`: each bit is flipped or not by a hash of the bits above it, so an
  * interval [a 2^-m, (a+1) 2^-m) goes to another of the same size, and a
  * random seed makes every point uniform while a stratified set stays
  * stratified. Burley 2020 ("Practical hash-based Owen scrambling", JCGT
  * 9(4)): on the reversed bits, a hash in which each bit depends only on the
- * bits below it (an add and multiplies by even constants). */
+ * bits below it. */
 inline uint rt_owen(uint x, uint seed)
 {
-    x = rt_reverse_bits(x) + seed;
-    x ^= x * 0x6c50b47cu;
-    x ^= x * 0xb82f1e52u;
-    x ^= x * 0xc7afe638u;
-    x ^= x * 0x8d22f6e6u;
-    return rt_reverse_bits(x);
+    return rt_owen_reversed_(rt_reverse_bits(x), seed);
 }
 
 /* Point k of an Owen-scrambled Sobol (0,2)-sequence keyed by `seed`, in
@@ -68,12 +76,19 @@ inline uint rt_owen(uint x, uint seed)
  * different strata. */
 inline float2 rt_sobol2(uint k, uint seed)
 {
-    uint x = rt_reverse_bits(k), y = 0u;
-    for (uint v = 1u << 31; k != 0u; k >>= 1, v ^= v >> 1)
-        if (k & 1u)
-            y ^= v;
-    x = rt_owen(x, rt_hash(seed ^ 0x2545f491u));
-    y = rt_owen(y, rt_hash(seed ^ 0x9e3779b9u));
+    /* The second dimension's bit 31 - j is the XOR of the bits i of k with
+     * C(i, j) odd, that is (Lucas) with j's bits a subset of i's: a sum over
+     * supersets, five shift-and-mask rounds on the reversed bits instead of
+     * a loop over k's. Both coordinates stay reversed into the scramble,
+     * which reverses them first. */
+    uint z = k;
+    z ^= (z >> 1) & 0x55555555u;
+    z ^= (z >> 2) & 0x33333333u;
+    z ^= (z >> 4) & 0x0f0f0f0fu;
+    z ^= (z >> 8) & 0x00ff00ffu;
+    z ^= (z >> 16) & 0x0000ffffu;
+    uint x = rt_owen_reversed_(k, rt_hash(seed ^ 0x2545f491u));
+    uint y = rt_owen_reversed_(z, rt_hash(seed ^ 0x9e3779b9u));
     return (float2)((float)(x >> 8), (float)(y >> 8)) * (1.0f / 16777216.0f);
 }
 
