@@ -629,7 +629,7 @@ static void test_radius(fixture *fx)
         set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
     random_queries(qs, nq, -0.2f, 1.2f, &seed);
     radius_case_auto(fx, "radius random", ph, np_max, qs, nq, 0.05f, 0, 0, 1);
-    radius_case_auto(fx, "radius random, dense cells fit", ph, np_max, qs, nq, 0.1f, 0, 0, 0);
+    radius_case_auto(fx, "radius random, dense cells fit", ph, np_max, qs, nq, 0.1f, 0, 0, 1);
     radius_case_auto(fx, "radius random, normal filter", ph, np_max, qs, nq, 0.05f, 1, 0, -1);
     radius_case_auto(fx, "radius random, 1 bucket", ph, 4000, qs, 400, 0.05f, 0, 1, -1);
     radius_case_auto(fx, "radius random, 2 buckets", ph, 4000, qs, 400, 0.05f, 0, 2, -1);

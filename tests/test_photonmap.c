@@ -161,8 +161,9 @@ static float *render_ppm(const sr_scene *scene, pm_options o, unsigned w, unsign
  * radius search finds the same photons over the hash as over the dense grid
  * (test_knn checks that photon by photon), so the images agree up to the
  * order in which each estimate's power is summed: float rounding, far below
- * the noise of one sample. Also: auto takes the hash there and the dense
- * grid where it fits or for Purcell's k-nearest search; the same seed gives
+ * the noise of one sample. Also: auto takes the hash there and for every
+ * progressive radius search, the dense grid for Purcell's k-nearest search;
+ * the same seed gives
  * the same image; the hash is refused where it cannot serve. */
 static void test_hashed_map(void)
 {
@@ -218,8 +219,9 @@ static void test_hashed_map(void)
     free(again);
     free(autom);
 
-    /* auto keeps the dense grid where its cells fit (cornell), and for the
-     * k-nearest search */
+    /* auto takes the hash for the progressive radius search also where the
+     * dense cells fit (cornell), and keeps the dense grid for the k-nearest
+     * search */
     sr_scene *c = builtin("cornell");
     if (c) {
         pm_options oc = pm_options_default();
@@ -228,7 +230,8 @@ static void test_hashed_map(void)
         oc.light_samples = 1;
         pm_stats sc;
         float *img = render_ppm(c, oc, 32, 32, 1, &sc);
-        CHECK(sc.maps_dense == 1 && strstr(sc.map_why, "dense"), "cornell, auto: %s", sc.map_why);
+        CHECK(sc.maps_hashed == 1 && strstr(sc.map_why, "hash (auto") && strstr(sc.map_why, "fit"),
+              "cornell, auto: %s", sc.map_why);
         free(img);
         img = render(c, oc, 32, 32, &sc);
         CHECK(sc.maps_dense == 1 && strstr(sc.map_why, "k-nearest"), "cornell, kNN: %s",

@@ -606,22 +606,23 @@ static void test_desc(void)
               SLUICE_ERROR_INVALID_ARGUMENT,
           "hash auto: NaN bounds");
 
-    /* the plan: dense where the cells fit, hashed where the cap makes them
-     * coarser than SR_POINT_GRID_HASH_COARSENING; a request decides */
+    /* the plan: auto takes the hash, whether the dense cells fit or the cap
+     * makes them coarser (the why says which); a request decides */
     sr_point_grid_plan plan;
     CHECK(sr_point_grid_plan_auto(lo, hi, 65000, 0.05f, 0.1f, SR_POINT_GRID_LAYOUT_AUTO, &plan, err,
                                   sizeof err) == SLUICE_OK,
           "%s", err);
-    CHECK(plan.layout == SR_POINT_GRID_DENSE && plan.coarsening == 1.0 &&
+    CHECK(plan.layout == SR_POINT_GRID_HASHED && plan.coarsening == 1.0 &&
               plan.dense.dims[0] == 27 && plan.hash.cell == (float)(SR_POINT_HASH_EDGE * 0.1) &&
-              strstr(plan.why, "dense"),
+              strstr(plan.why, "hash (auto") && strstr(plan.why, "fit"),
           "plan, cells that fit: %d, %g: %s", (int)plan.layout, plan.coarsening, plan.why);
     const float wlo[3] = {-1000, -1000, -1000}, whi[3] = {1000, 1000, 1000};
     CHECK(sr_point_grid_plan_auto(wlo, whi, 65000, 0.05f, 0.1f, SR_POINT_GRID_LAYOUT_AUTO, &plan,
                                   err, sizeof err) == SLUICE_OK,
           "%s", err);
-    CHECK(plan.layout == SR_POINT_GRID_HASHED && plan.coarsening > SR_POINT_GRID_HASH_COARSENING &&
-              plan.wanted_cells > 1e14 && strstr(plan.why, "hash"),
+    CHECK(plan.layout == SR_POINT_GRID_HASHED && plan.coarsening > 1.0 &&
+              plan.wanted_cells > 1e14 && strstr(plan.why, "hash (auto") &&
+              strstr(plan.why, "coarser"),
           "plan, a huge box: %d, %g: %s", (int)plan.layout, plan.coarsening, plan.why);
     CHECK(sr_point_grid_plan_auto(wlo, whi, 65000, 0.05f, 0.1f, SR_POINT_GRID_DENSE, &plan, err,
                                   sizeof err) == SLUICE_OK &&

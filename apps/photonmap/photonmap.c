@@ -302,8 +302,7 @@ static sluice_status photon_bounds(pm_renderer *r, const sr_scene_stats *ss, flo
  * `cell` wide (sr_point_grid_desc_auto), or of the --grid dimensions; or,
  * for a radius search of `search_radius` (> 0: the progressive estimate),
  * the layout sr_point_grid_plan_auto chooses for pm_options.photon_grid
- * (Purcell 6.4.4: a hash where a dense grid at such cells would be too
- * large). */
+ * (Purcell 6.4.4's hash unless the dense grid is asked for). */
 static sluice_status build_grid(pm_renderer *r, float cell, float search_radius, char *err,
                                 size_t err_size)
 {

@@ -63,10 +63,9 @@ typedef struct pm_options {
     /** The photon map's layout (point_grid.h): SR_POINT_GRID_LAYOUT_AUTO (the
      *  default), SR_POINT_GRID_DENSE or SR_POINT_GRID_HASHED. Only the
      *  progressive radius search reads a hashed map (Purcell 6.4.4): auto
-     *  takes the hash there when sr_point_grid_plan_auto finds the dense
-     *  grid's cells too coarse for the radius (a small lit object and a
-     *  distant wall), and the dense grid everywhere else, for the k-nearest
-     *  searches, the stencil build and --grid dimensions. Asking for the hash
+     *  takes the hash there (sr_point_grid_plan_auto), and the dense grid
+     *  everywhere else, for the k-nearest searches, the stencil build and
+     *  --grid dimensions. Asking for the hash
      *  where it cannot serve is an error of pm_renderer_create. */
     sr_point_grid_layout photon_grid;
 } pm_options;

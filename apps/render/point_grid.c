@@ -779,11 +779,10 @@ sluice_status sr_point_grid_plan_auto(const float lo[3], const float hi[3], size
     const rt_grid_desc *d = &out->dense;
     size_t cells = (size_t)d->dims[0] * d->dims[1] * d->dims[2];
     double aim = SR_POINT_GRID_AUTO_EDGE * (double)dense_radius;
-    int hashed =
-        request == SR_POINT_GRID_HASHED ||
-        (request == SR_POINT_GRID_LAYOUT_AUTO && out->coarsening > SR_POINT_GRID_HASH_COARSENING);
+    int hashed = request != SR_POINT_GRID_DENSE;
     out->layout = hashed ? SR_POINT_GRID_HASHED : SR_POINT_GRID_DENSE;
-    const char *how = request == SR_POINT_GRID_LAYOUT_AUTO ? "" : " (asked for)";
+    const char *how =
+        request == SR_POINT_GRID_LAYOUT_AUTO ? " (auto: the faster search)" : " (asked for)";
     const char *name = hashed ? "hash" : "dense";
     if (out->coarsening > 1.0)
         snprintf(out->why, sizeof out->why,

@@ -122,14 +122,6 @@ typedef struct sr_point_hash_desc {
  *  cell function stays far below a cell. */
 #define SR_POINT_HASH_MAX_SIDE (1u << 21)
 
-/** sr_point_grid_plan_auto's rule: with a layout of SR_POINT_GRID_LAYOUT_AUTO
- *  it takes the hashed layout when sr_point_grid_desc_auto had to make the
- *  dense cells more than this many times coarser than it aimed at: 1, that
- *  is whenever its cap on cells bites. No margin: in the progressive photon
- *  mapper the hash's radius search was faster than the dense grid's on every
- *  scene measured, even where the dense cells fit (bench/README.md). */
-#define SR_POINT_GRID_HASH_COARSENING 1.0
-
 /** Statistics of the last build. */
 typedef struct sr_point_grid_stats {
     size_t points;            /**< points given */
@@ -256,10 +248,13 @@ typedef struct sr_point_grid_plan {
  * sr_point_grid_desc_auto(lo, hi, points, dense_radius) and the hashed
  * layout of sr_point_hash_desc_auto(lo, hi, points, search_radius) are both
  * made, and `request` picks one: SR_POINT_GRID_DENSE, SR_POINT_GRID_HASHED,
- * or SR_POINT_GRID_LAYOUT_AUTO: hashed when the dense cells came out more
- * than SR_POINT_GRID_HASH_COARSENING times coarser than aimed at. Only a
- * search that can read a hashed grid should ask for it or for auto (the
- * kNN search's radius mode). `why` says which and why, with the figures.
+ * or SR_POINT_GRID_LAYOUT_AUTO, which takes the hash: in the progressive
+ * photon mapper the hash's radius search was faster than the dense grid's
+ * on every scene measured, most where the dense grid's cap on cells makes
+ * its cells coarser than aimed at, but also where they fit
+ * (bench/README.md). Only a search that can read a hashed grid should ask
+ * for it or for auto (the kNN search's radius mode). `why` says which and
+ * why, with the dense grid's figures.
  * Errors as the two helpers, and an unknown request
  * (SLUICE_ERROR_INVALID_ARGUMENT).
  */
