@@ -65,8 +65,8 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
         float3 ln = (float3)(0.0f), le;
         if (area) {
             float3 q;
-            uint lt = rt_area_light_sample(up.x, up.y, a.area_lights, area_tris, area_cdf, tv, &q,
-                                           &ln);
+            uint lt =
+                rt_area_light_sample(up.x, up.y, a.area_lights, area_tris, area_cdf, tv, &q, &ln);
             rt_material m = mats[tri_mat[lt]];
             le = (float3)(m.er, m.eg, m.eb);
             o = q;

@@ -84,7 +84,8 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
              * the hit's samples stratified over the lights together */
             float2 u = rt_sobol2(k, rt_key(ray.key, 16u));
             float3 q, ln;
-            uint lt = rt_area_light_sample(u.x, u.y, f.area_lights, area_tris, area_cdf, tv, &q, &ln);
+            uint lt =
+                rt_area_light_sample(u.x, u.y, f.area_lights, area_tris, area_cdf, tv, &q, &ln);
             rt_material lm = mats[tri_mat[lt]];
             float3 L = q - (s.p + off);
             float d2 = dot(L, L), dist = sqrt(d2);

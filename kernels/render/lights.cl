@@ -15,8 +15,8 @@
  * CDF, so the map from (u0, u1) to the lights' surface keeps areas: points
  * stratified in the unit square stay stratified on the lights (rt_sobol2). */
 inline uint rt_area_light_sample(float u0, float u1, uint count, global const uint *area_tris,
-                                 global const float *area_cdf, global const float *tv,
-                                 float3 *q, float3 *ln)
+                                 global const float *area_cdf, global const float *tv, float3 *q,
+                                 float3 *ln)
 {
     uint lo = 0u, hi = count - 1u;
     while (lo < hi) {
