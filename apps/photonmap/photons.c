@@ -41,9 +41,9 @@ struct pm_photons {
     double yield;    /* stored per emitted in the last trace (0: none yet) */
 };
 
-/* Share of a point light's photons sent toward the mirrors and glass when
- * the scene has both (Jensen's projection map, kept unbiased as a mixture
- * with uniform emission: see pm_emit). Half keeps the uniform part's
+/* Share of each batch's photons sent toward the mirrors and glass when the
+ * scene has any (Jensen's projection map, kept unbiased as a fixed-share
+ * mixture with the lights' own emission: see pm_emit). Half keeps the uniform part's
  * indirect light well sampled while caustic photons, which a point light
  * far from a small mirror rarely sends, cost a few emissions each. */
 #define PM_SPECULAR_SHARE 0.5f
