@@ -32,13 +32,14 @@ struct pm_photons {
     rt_tracer *tracer;
     const sr_device_scene *ds;
     sluice_program *program;
-    sluice_kernel *k_emit, *k_bounce, *k_scale;
+    sluice_kernel *k_emit, *k_bounce, *k_route, *k_scale;
     sluice_counters *counters;
     sluice_stream *rays, *next, *hits, *stored;
-    float area_prob; /* share of the photons that leave area lights */
-    int specular;    /* the scene has mirrors or glass */
-    float spec[4];   /* their bounding sphere: centre, radius */
-    double yield;    /* stored per emitted in the last trace (0: none yet) */
+    sluice_stream *photon_at, *ray_at, *route; /* pm_bounce's results, by photon */
+    float area_prob;                           /* share of the photons that leave area lights */
+    int specular;                              /* the scene has mirrors or glass */
+    float spec[4];                             /* their bounding sphere: centre, radius */
+    double yield; /* stored per emitted in the last trace (0: none yet) */
 };
 
 /* Share of each batch's photons sent toward the mirrors and glass when the
@@ -54,10 +55,11 @@ void pm_photons_destroy(pm_photons *p)
         return;
     sluice_kernel_destroy(p->k_emit);
     sluice_kernel_destroy(p->k_bounce);
+    sluice_kernel_destroy(p->k_route);
     sluice_kernel_destroy(p->k_scale);
     sluice_program_destroy(p->program);
     sluice_counters_destroy(p->counters);
-    sluice_stream *s[] = {p->rays, p->next, p->hits, p->stored};
+    sluice_stream *s[] = {p->rays, p->next, p->hits, p->stored, p->photon_at, p->ray_at, p->route};
     for (size_t i = 0; i < sizeof s / sizeof *s; ++i)
         sluice_stream_destroy(s[i]);
     free(p);
@@ -173,6 +175,8 @@ sluice_status pm_photons_create(rt_tracer *tracer, pm_photons **out, char *err, 
     if (st == SLUICE_OK)
         st = sluice_kernel_create(p->program, "pm_bounce", &p->k_bounce);
     if (st == SLUICE_OK)
+        st = sluice_kernel_create(p->program, "pm_route", &p->k_route);
+    if (st == SLUICE_OK)
         st = sluice_kernel_create(p->program, "pm_scale_power", &p->k_scale);
     static const char *const ctr[] = {"stored",      "bounced",   "left scene", "absorbed",
                                       "depth limit", "nonfinite", "caustic"};
@@ -235,8 +239,9 @@ static sluice_status emit(pm_photons *p, const pm_photon_options *opt, uint32_t 
     return st;
 }
 
-/* One bounce pass over the n photons in p->rays: stored photons append to
- * p->stored, bounced ones go to p->next. */
+/* One bounce pass over the n photons in p->rays: pm_bounce works out each
+ * photon's bounce at its own index, pm_route appends the stored ones to
+ * p->stored and puts the bounced ones in p->next. */
 static sluice_status bounce(pm_photons *p, const pm_photon_options *opt, size_t n,
                             pm_photon_stats *stats)
 {
@@ -247,6 +252,12 @@ static sluice_status bounce(pm_photons *p, const pm_photon_options *opt, size_t 
     if (st == SLUICE_OK)
         st = ensure(ctx, &p->stored, sizeof(pm_photon), have + n);
     if (st == SLUICE_OK)
+        st = ensure(ctx, &p->photon_at, sizeof(pm_photon), n);
+    if (st == SLUICE_OK)
+        st = ensure(ctx, &p->ray_at, sizeof(rt_ray), n);
+    if (st == SLUICE_OK)
+        st = ensure(ctx, &p->route, sizeof(uint32_t), n);
+    if (st == SLUICE_OK)
         st = rt_tracer_trace_stream(p->tracer, p->rays, n, p->hits);
     if (st == SLUICE_OK)
         st = sluice_stream_clear(p->next);
@@ -256,19 +267,31 @@ static sluice_status bounce(pm_photons *p, const pm_photon_options *opt, size_t 
     uint32_t depth = opt->max_depth;
     if (st == SLUICE_OK)
         st = sluice_kernel_set_input(k, 0, p->rays);
+    sluice_stream *per_photon[] = {p->hits,     p->photon_at,    p->ray_at,
+                                   p->route,    ds->tri_records, ds->indices,
+                                   ds->normals, ds->tri_mat,     ds->materials};
+    for (unsigned i = 0; i < 9 && st == SLUICE_OK; ++i)
+        st = sluice_kernel_set_stream(k, 1 + i, per_photon[i], 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, 1, p->hits, 0);
+        st = sluice_kernel_set_arg(k, 10, sizeof depth, &depth);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_output(k, 2, 0, p->stored, SLUICE_ORDERED);
+        st = sluice_kernel_set_arg(k, 11, sizeof ds->scene_eps, &ds->scene_eps);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_output(k, 3, 1, p->next, SLUICE_ORDERED);
-    sluice_stream *bufs[] = {ds->tri_records, ds->indices, ds->normals, ds->tri_mat, ds->materials};
-    for (unsigned i = 0; i < 5 && st == SLUICE_OK; ++i)
-        st = sluice_kernel_set_stream(k, 4 + i, bufs[i], 0);
+        st = sluice_kernel_launch(k);
+    /* the route, one per photon of the pass, drives the routing launch */
+    k = p->k_route;
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_arg(k, 9, sizeof depth, &depth);
+        st = sluice_stream_set_length(p->route, n);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_arg(k, 10, sizeof ds->scene_eps, &ds->scene_eps);
+        st = sluice_kernel_set_input(k, 0, p->route);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 1, p->photon_at, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 2, p->ray_at, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(k, 3, 0, p->stored, SLUICE_ORDERED);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(k, 4, 1, p->next, SLUICE_ORDERED);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(k);
     uint32_t c[PC_COUNT];

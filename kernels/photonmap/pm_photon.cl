@@ -2,10 +2,11 @@
  * pm_photon.cl: photon tracing as streams (Purcell 6.2.1). Photons leave the
  * lights as rays of kind RT_KIND_PHOTON, go through the same tracer as every
  * other ray (kernels/render/rt_*.cl), and a bounce pass over each photon with
- * its hit decides, by conditional outputs, whether it is stored (output 0:
- * a pm_photon at a diffuse or glossy surface), bounced (output 1: the next
- * photon ray) or dropped (left the scene, absorbed by Russian roulette, past
- * the depth limit). The host loops until the bounced stream is empty.
+ * its hit decides whether it is stored (a pm_photon at a diffuse or glossy
+ * surface), bounced (the next photon ray) or dropped (left the scene,
+ * absorbed by Russian roulette, past the depth limit); a routing pass moves
+ * them by conditional outputs (stored: output 0, bounced: output 1). The
+ * host loops until the bounced stream is empty.
  *
  * Power: a photon carries the flux of its light divided by the probability
  * of choosing that light, point and direction; the host divides the stored
@@ -113,15 +114,17 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
     }
 }
 
-#define PM_STORE(cond, ph) SLUICE_EMIT_IF(0, stored, ph, cond)
-#define PM_BOUNCE(cond, ray) SLUICE_EMIT_IF(1, bounced, ray, cond)
-
-/* One bounce of every photon of the stream: store, bounce or drop. */
+/* One bounce of every photon of the stream, worked out once: the photon as
+ * it would be stored, the ray it would go on as, and where it goes (bit 0:
+ * stored, bit 1: bounced; neither: dropped), all at the photon's own index.
+ * pm_route then moves them to the stored and bounced streams. Emitting here
+ * would run this body twice, once to count and once to write (ordered
+ * outputs, sluice.cl), for outputs a cheap kernel can route. */
 __kernel void pm_bounce(SLUICE_PARAMS, global const rt_ray *rays, global const rt_hit *hits,
-                        global pm_photon *stored, global rt_ray *bounced, global const float *tv,
-                        global const uint *indices, global const float *normals,
-                        global const uint *tri_mat, global const rt_material *mats, uint max_depth,
-                        float scene_eps)
+                        global pm_photon *photon_at, global rt_ray *ray_at, global uint *route,
+                        global const float *tv, global const uint *indices,
+                        global const float *normals, global const uint *tri_mat,
+                        global const rt_material *mats, uint max_depth, float scene_eps)
 {
     SLUICE_FOR_EACH (i) {
         rt_ray ray = rays[i];
@@ -201,14 +204,29 @@ __kernel void pm_bounce(SLUICE_PARAMS, global const rt_ray *rays, global const r
         ph.dy = d.y;
         ph.dz = d.z;
         ph.flags = min(depth, 255u) | (specular_path ? PM_PHOTON_CAUSTIC : 0u);
-        PM_STORE(store, ph);
+        photon_at[i] = ph;
         SLUICE_COUNT(0, store);
         SLUICE_COUNT(6, store && specular_path);
         uint spec_bit = (specular_path && (kind == 1u || kind == 2u)) ? PM_RAY_SPECULAR : 0u;
-        PM_BOUNCE(go, rt_spawn(hit ? s.p : (float3)(0.0f), off, dir, INFINITY, wb, 0u,
-                               rt_key(ray.key, depth + 7u),
-                               RT_KIND_PHOTON | spec_bit | ((depth + 1u) << RT_DEPTH_SHIFT)));
+        ray_at[i] = rt_spawn(hit ? s.p : (float3)(0.0f), off, dir, INFINITY, wb, 0u,
+                             rt_key(ray.key, depth + 7u),
+                             RT_KIND_PHOTON | spec_bit | ((depth + 1u) << RT_DEPTH_SHIFT));
+        route[i] = (store ? 1u : 0u) | (go ? 2u : 0u);
         SLUICE_COUNT(1, go);
+    }
+}
+
+/* Moves pm_bounce's results by their route: photons to be stored to
+ * output 0, photons that bounce on to output 1 (both ordered). Only the
+ * routes are read to count. */
+__kernel void pm_route(SLUICE_PARAMS, global const uint *route, global const pm_photon *photon_at,
+                       global const rt_ray *ray_at, global pm_photon *stored,
+                       global rt_ray *bounced)
+{
+    SLUICE_FOR_EACH (i) {
+        uint r = route[i];
+        SLUICE_EMIT_IF(0, stored, photon_at[i], (r & 1u) != 0u);
+        SLUICE_EMIT_IF(1, bounced, ray_at[i], (r & 2u) != 0u);
     }
 }
 
