@@ -43,6 +43,11 @@
  *
  *   bench_raytrace [--size N] [--reps R] [--scene NAME]... [--out FILE]
  *                  [--purcell-size N] [--skip-purcell] [--quick]
+ *                  [--embree-isa ISA]
+ *
+ * Embree picks its code path at run time; when the kernels were built for
+ * AVX2 on an AVX-512 machine (POCL_KERNELLIB_NAME=avx2), Embree is held to
+ * AVX2 as well (max_isa), so the run stands for an AVX2 CPU on both sides.
  *
  * Exit status 1 when a Sluice mode or the C tracer disagrees with another on
  * more than 1% of the rays of either set (a broken tracer), 2 on setup
@@ -77,6 +82,10 @@
 #define BUNNY_PATH "/usr/share/glmark2/models/bunny.obj"
 
 static sluice_context *ctx;
+/* Embree's device configuration (rtcNewDevice): "max_isa=avx2" when the
+ * kernels were built for AVX2, so that both sides of the comparison use the
+ * instruction set an AVX2 CPU has (see --embree-isa). */
+static char embree_config[64];
 
 #define TRY(call)                                                                                  \
     do {                                                                                           \
@@ -859,9 +868,9 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     cgrid_init(&pe.cg, &gh, sc);
 #ifdef HAVE_EMBREE
     res->embree = 1;
-    RTCDevice dev = rtcNewDevice(NULL);
+    RTCDevice dev = rtcNewDevice(embree_config[0] ? embree_config : NULL);
     if (!dev) {
-        fprintf(stderr, PROG ": rtcNewDevice failed\n");
+        fprintf(stderr, PROG ": rtcNewDevice(\"%s\") failed\n", embree_config);
         exit(2);
     }
     pe.es = rtcNewScene(dev);
@@ -972,10 +981,21 @@ static int purcell_run(const char *name, unsigned size, unsigned min_dim, purcel
 /* Main                                                                */
 /* ------------------------------------------------------------------ */
 
+static int embree_isa_known(const char *s)
+{
+    static const char *const known[] = {"auto", "native", "sse2",  "sse4.2",
+                                        "avx",  "avx2",   "avx512"};
+    for (size_t i = 0; i < sizeof known / sizeof *known; ++i)
+        if (strcmp(s, known[i]) == 0)
+            return 1;
+    return 0;
+}
+
 static void usage(FILE *f)
 {
     fprintf(f, "usage: " PROG " [--size N] [--reps R] [--scene NAME]... [--out FILE]\n"
                "                      [--purcell-size N] [--skip-purcell] [--quick]\n"
+               "                      [--embree-isa ISA]\n"
                "  --size N          image side for the rays/s comparison (default 512)\n"
                "  --reps R          timed rounds, each running every peer for 8 frames;\n"
                "                    the best frame of each peer is kept (default 10)\n"
@@ -984,7 +1004,11 @@ static void usage(FILE *f)
                "  --out FILE        write the results as JSON\n"
                "  --purcell-size N  image side for Purcell's statistics (default 1024)\n"
                "  --skip-purcell    no Purcell statistics\n"
-               "  --quick           smoke test: 64x64, 1 rep, Purcell at 64x64\n");
+               "  --quick           smoke test: 64x64, 1 rep, Purcell at 64x64\n"
+               "  --embree-isa ISA  the widest instruction set Embree may use: sse2, sse4.2,\n"
+               "                    avx, avx2, avx512, native (its own choice), or auto\n"
+               "                    (default: avx2 when the kernels were built for AVX2,\n"
+               "                    as with POCL_KERNELLIB_NAME=avx2, else native)\n");
 }
 
 static double rate(size_t n, double s)
@@ -1115,6 +1139,7 @@ int main(int argc, char **argv)
     size_t nscenes = 0;
     unsigned size = 512, reps = 10, psize = 1024;
     int skip_purcell = 0, quick = 0;
+    const char *embree_isa = "auto";
     for (int i = 1; i < argc; ++i) {
         if (strcmp(argv[i], "--scene") == 0 && i + 1 < argc && nscenes < MAX_SCENES)
             scenes[nscenes++] = argv[++i];
@@ -1131,6 +1156,9 @@ int main(int argc, char **argv)
             out = argv[++i];
         else if (strcmp(argv[i], "--skip-purcell") == 0)
             skip_purcell = 1;
+        else if (strcmp(argv[i], "--embree-isa") == 0 && i + 1 < argc &&
+                 embree_isa_known(argv[i + 1]))
+            embree_isa = argv[++i];
         else if (strcmp(argv[i], "--quick") == 0) {
             quick = 1;
             size = 64;
@@ -1168,8 +1196,13 @@ int main(int argc, char **argv)
     bench_machine_probe(ctx, &mach);
     printf("device: %s / %s, %u compute units\nCPU: %s (%s), kernels' block emission: %s\n",
            info.platform, info.name, info.compute_units, mach.cpu, mach.isa, mach.block);
+    if (strcmp(embree_isa, "auto") == 0)
+        embree_isa = strcmp(mach.block, "avx2") == 0 ? "avx2" : "native";
+    if (strcmp(embree_isa, "native") != 0)
+        snprintf(embree_config, sizeof embree_config, "max_isa=%s", embree_isa);
 #ifdef HAVE_EMBREE
-    printf("Embree %s, BVH build quality high, 1 and 2 threads\n", RTC_VERSION_STRING);
+    printf("Embree %s, BVH build quality high, 1 and 2 threads, ISA: %s\n", RTC_VERSION_STRING,
+           strcmp(embree_isa, "native") == 0 ? "its own choice" : embree_config);
 #else
     printf("Embree: not built in (install libembree-dev: sh tools/install-deps.sh --bench)\n");
 #endif
@@ -1301,8 +1334,8 @@ int main(int argc, char **argv)
                 "  \"embree\": {\"available\": true, \"version\": \"%s\", \"build_quality\": "
                 "\"high\", \"threads\": \"1 or 2, a pthread split of 4-pixel tile rows\", "
                 "\"best\": \"the fastest of variants x threads\", \"variants\": "
-                "[\"rtcIntersect1\", \"rtcIntersect16 (4x4 tiles)\"]},\n",
-                RTC_VERSION_STRING);
+                "[\"rtcIntersect1\", \"rtcIntersect16 (4x4 tiles)\"], \"max_isa\": \"%s\"},\n",
+                RTC_VERSION_STRING, embree_isa);
 #else
         fprintf(
             f, "  \"embree\": {\"available\": false, \"why\": \"built without Embree 3 "
