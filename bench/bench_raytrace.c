@@ -43,7 +43,7 @@
  *
  *   bench_raytrace [--size N] [--reps R] [--scene NAME]... [--out FILE]
  *                  [--purcell-size N] [--skip-purcell] [--quick]
- *                  [--embree-isa ISA]
+ *                  [--embree-isa ISA] [--grid-min-dim N]
  *
  * Embree picks its code path at run time; when the kernels were built for
  * AVX2 on an AVX-512 machine (POCL_KERNELLIB_NAME=avx2), Embree is held to
@@ -86,6 +86,8 @@ static sluice_context *ctx;
  * kernels were built for AVX2, so that both sides of the comparison use the
  * instruction set an AVX2 CPU has (see --embree-isa). */
 static char embree_config[64];
+/* --grid-min-dim: 0 for the tracer's automatic resolution */
+static unsigned grid_min_dim;
 
 #define TRY(call)                                                                                  \
     do {                                                                                           \
@@ -809,9 +811,12 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     const sr_scene_stats *ss = sr_scene_statistics(sc);
     /* The tracer's default resolution (rt_grid_auto_min_dim_edge), for all peers
      * that use a grid. */
-    unsigned min_dim = rt_grid_auto_min_dim_edge(
-        ss->bounds_min, ss->bounds_max, ss->triangles,
-        rt_grid_edge_quartile(sr_scene_positions(sc), sr_scene_indices(sc), ss->triangles));
+    unsigned min_dim =
+        grid_min_dim
+            ? grid_min_dim
+            : rt_grid_auto_min_dim_edge(ss->bounds_min, ss->bounds_max, ss->triangles,
+                                        rt_grid_edge_quartile(sr_scene_positions(sc),
+                                                              sr_scene_indices(sc), ss->triangles));
     res->min_dim = min_dim;
     rt_grid_desc desc;
     if (rt_grid_choose(ss->bounds_min, ss->bounds_max, min_dim, &desc, err, sizeof err) !=
@@ -995,7 +1000,7 @@ static void usage(FILE *f)
 {
     fprintf(f, "usage: " PROG " [--size N] [--reps R] [--scene NAME]... [--out FILE]\n"
                "                      [--purcell-size N] [--skip-purcell] [--quick]\n"
-               "                      [--embree-isa ISA]\n"
+               "                      [--embree-isa ISA] [--grid-min-dim N]\n"
                "  --size N          image side for the rays/s comparison (default 512)\n"
                "  --reps R          timed rounds, each running every peer for 8 frames;\n"
                "                    the best frame of each peer is kept (default 10)\n"
@@ -1008,7 +1013,9 @@ static void usage(FILE *f)
                "  --embree-isa ISA  the widest instruction set Embree may use: sse2, sse4.2,\n"
                "                    avx, avx2, avx512, native (its own choice), or auto\n"
                "                    (default: avx2 when the kernels were built for AVX2,\n"
-               "                    as with POCL_KERNELLIB_NAME=avx2, else native)\n");
+               "                    as with POCL_KERNELLIB_NAME=avx2, else native)\n"
+               "  --grid-min-dim N  voxels along the grid's shortest axis, 1 .. 1024 (default:\n"
+               "                    the tracer's automatic resolution per scene)\n");
 }
 
 static double rate(size_t n, double s)
@@ -1156,6 +1163,9 @@ int main(int argc, char **argv)
             out = argv[++i];
         else if (strcmp(argv[i], "--skip-purcell") == 0)
             skip_purcell = 1;
+        else if (strcmp(argv[i], "--grid-min-dim") == 0 && i + 1 < argc &&
+                 bench_parse_uint(argv[i + 1], 1024, &grid_min_dim) && grid_min_dim > 0)
+            ++i;
         else if (strcmp(argv[i], "--embree-isa") == 0 && i + 1 < argc &&
                  embree_isa_known(argv[i + 1]))
             embree_isa = argv[++i];
@@ -1325,10 +1335,12 @@ int main(int argc, char **argv)
                 "\"reps\": %u, \"timing\": \"interleaved rounds, each timing every peer for %u "
                 "frames back to back; the best frame of reps rounds after a warm-up round; "
                 "Sluice: trace only, "
-                "rays and hits in device streams\", \"grid_min_dim\": \"auto "
-                "(rt_grid_auto_min_dim_edge with rt_grid_edge_quartile, per scene)\", \"quick\": "
-                "%s},\n",
-                size, size, BOUNCE_SEED, reps, BENCH_BURST, quick ? "true" : "false");
+                "rays and hits in device streams\", \"grid_min_dim\": \"%s\", \"quick\": %s},\n",
+                size, size, BOUNCE_SEED, reps, BENCH_BURST,
+                grid_min_dim ? "--grid-min-dim (each scene's grid.min_dim)"
+                             : "auto (rt_grid_auto_min_dim_edge with rt_grid_edge_quartile, per "
+                               "scene)",
+                quick ? "true" : "false");
 #ifdef HAVE_EMBREE
         fprintf(f,
                 "  \"embree\": {\"available\": true, \"version\": \"%s\", \"build_quality\": "
