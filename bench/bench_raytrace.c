@@ -809,14 +809,13 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
 
     /* the grid: plain C build (also the C tracer's) and the device build */
     const sr_scene_stats *ss = sr_scene_statistics(sc);
-    /* The tracer's default resolution (rt_grid_auto_min_dim_edge), for all peers
-     * that use a grid. */
-    unsigned min_dim =
-        grid_min_dim
-            ? grid_min_dim
-            : rt_grid_auto_min_dim_edge(ss->bounds_min, ss->bounds_max, ss->triangles,
-                                        rt_grid_edge_quartile(sr_scene_positions(sc),
-                                                              sr_scene_indices(sc), ss->triangles));
+    /* The fused tracer's resolution (its automatic choice unless
+     * --grid-min-dim), for all peers that use a grid. */
+    peers pe;
+    memset(&pe, 0, sizeof pe);
+    pe.w = pe.h = size;
+    pe.tf = make_tracer(sc, RT_EXEC_FUSED, grid_min_dim, 0, &res->tracer_create_s[0]);
+    unsigned min_dim = rt_tracer_grid_min_dim(pe.tf);
     res->min_dim = min_dim;
     rt_grid_desc desc;
     if (rt_grid_choose(ss->bounds_min, ss->bounds_max, min_dim, &desc, err, sizeof err) !=
@@ -865,10 +864,6 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
 
     /* the peers: (a), (b) Sluice, rays already on the device, (c) plain C,
      * (d) Embree */
-    peers pe;
-    memset(&pe, 0, sizeof pe);
-    pe.w = pe.h = size;
-    pe.tf = make_tracer(sc, RT_EXEC_FUSED, min_dim, 0, &res->tracer_create_s[0]);
     pe.ts = make_tracer(sc, RT_EXEC_STREAM, min_dim, 0, &res->tracer_create_s[1]);
     cgrid_init(&pe.cg, &gh, sc);
 #ifdef HAVE_EMBREE
@@ -1338,8 +1333,8 @@ int main(int argc, char **argv)
                 "rays and hits in device streams\", \"grid_min_dim\": \"%s\", \"quick\": %s},\n",
                 size, size, BOUNCE_SEED, reps, BENCH_BURST,
                 grid_min_dim ? "--grid-min-dim (each scene's grid.min_dim)"
-                             : "auto (rt_grid_auto_min_dim_edge with rt_grid_edge_quartile, per "
-                               "scene)",
+                             : "auto: the ray tracer's choice per scene (rt_tracer_grid_min_dim; "
+                               "the sparse density, else the dense one)",
                 quick ? "true" : "false");
 #ifdef HAVE_EMBREE
         fprintf(f,

@@ -660,6 +660,43 @@ static int images_identical(const sr_image *a, const sr_image *b)
     return memcmp(sr_image_pixels_const(a), sr_image_pixels_const(b), n * sizeof(float)) == 0;
 }
 
+/* The automatic grid: the sparse density for a large mesh whose voxels stay
+ * mostly empty (teapotahedron), the dense one for small scenes (ring,
+ * glassball; cornell, where the edge floor decides either way). */
+static void test_auto_grid(void)
+{
+    static const struct {
+        const char *scene;
+        int sparse; /* expects the sparse density's grid */
+    } cases[] = {{"teapotahedron", 1}, {"ring", 0}, {"glassball", 0}, {"cornell", 0}};
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; ++c) {
+        sr_scene *s = load(cases[c].scene);
+        CHECK(s != NULL, "load %s", cases[c].scene);
+        if (!s)
+            continue;
+        rt_tracer *t = make_tracer(s, RT_EXEC_FUSED, RT_ISECT_MT);
+        if (t) {
+            const sr_scene_stats *ss = sr_scene_statistics(s);
+            size_t nt = sr_scene_triangle_count(s);
+            double edge = rt_grid_edge_quartile(sr_scene_positions(s), sr_scene_indices(s), nt);
+            unsigned want =
+                cases[c].sparse
+                    ? rt_grid_auto_min_dim_density(ss->bounds_min, ss->bounds_max, nt, edge,
+                                                   RT_GRID_AUTO_DENSITY_SPARSE)
+                    : rt_grid_auto_min_dim_edge(ss->bounds_min, ss->bounds_max, nt, edge);
+            unsigned got = rt_tracer_grid_min_dim(t);
+            CHECK(got == want, "%s: grid min dim %u, expected %u", cases[c].scene, got, want);
+            const rt_grid_desc *d = &rt_tracer_grid(t)->desc;
+            unsigned mn = d->dims[0] < d->dims[1] ? d->dims[0] : d->dims[1];
+            mn = mn < d->dims[2] ? mn : d->dims[2];
+            CHECK(mn <= got, "%s: grid %ux%ux%u for min dim %u", cases[c].scene, d->dims[0],
+                  d->dims[1], d->dims[2], got);
+            rt_tracer_destroy(t);
+        }
+        sr_scene_destroy(s);
+    }
+}
+
 static void test_determinism(void)
 {
     sr_scene *s = load("cornell");
@@ -901,6 +938,7 @@ int main(int argc, char **argv)
     test_watertight();
     test_reference_images(NULL);
     test_determinism();
+    test_auto_grid();
     test_camera_inside();
     test_near_area_light();
     sluice_context_destroy(ctx);

@@ -798,6 +798,20 @@ static void test_auto_min_dim(void)
     d = rt_grid_auto_min_dim_edge(lo, cube, 1000, NAN);
     CHECK(d == 17, "NaN edge floor: min dim %u, expected 17", d);
 
+    /* another density: 1.5 voxels per triangle, 1500 voxels, 11.4 per axis;
+     * a density that is not positive and finite is the default one */
+    d = rt_grid_auto_min_dim_density(lo, cube, 1000, 0.0, 1.5);
+    CHECK(d == 11, "density 1.5: min dim %u, expected 11", d);
+    d = rt_grid_auto_min_dim_density(lo, cube, 1000, 0.0, RT_GRID_AUTO_DENSITY);
+    CHECK(d == 17, "default density: min dim %u, expected 17", d);
+    d = rt_grid_auto_min_dim_density(lo, cube, 1000, 0.25, 1.5);
+    CHECK(d == 4, "density 1.5, edge floor 0.25: min dim %u, expected 4", d);
+    const double bad_density[] = {0.0, -1.0, NAN, INFINITY};
+    for (size_t k = 0; k < sizeof bad_density / sizeof *bad_density; ++k) {
+        d = rt_grid_auto_min_dim_density(lo, cube, 1000, 0.0, bad_density[k]);
+        CHECK(d == 17, "density %g: min dim %u, expected 17", bad_density[k], d);
+    }
+
     /* edge quartile: right triangles with legs 1 and 2 (edges 1, 2, sqrt 5):
      * the lower quartile of {1, 2, 2.24} x N is 1; a non-finite vertex's
      * edges are left out; no triangles give 0 */

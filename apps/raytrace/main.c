@@ -39,8 +39,10 @@ static void usage(FILE *out)
         "  --light-samples N        shadow rays per area light and hit (default: the scene's)\n"
         "  --max-depth N            bounces in whitted and path modes (default: the scene's)\n"
         "  --grid-min-dim N|auto    voxels along the shortest axis, 1 .. 1024 (default auto:\n"
-        "                           about %g voxels per triangle, voxels no smaller than\n"
-        "                           the lower quartile of the triangles' edges)\n"
+        "                           about %g voxels per triangle for meshes of %u\n"
+        "                           triangles or more where most voxels stay empty,\n"
+        "                           else %g; voxels no smaller than the lower quartile\n"
+        "                           of the triangles' edges)\n"
         "  --grid-build B           device | host (default device)\n"
         "  --intersect-threshold F  stream mode: intersect when >= F of live rays need it\n"
         "                           (default 0.2)\n"
@@ -54,7 +56,7 @@ static void usage(FILE *out)
         "  " PROG " --scene glassball --mode whitted --max-depth 8 --out glass.exr\n"
         "  " PROG " --scene cornell --mode path --spp 64 --progress --checkpoint 16\n"
         "  " PROG " --scene cornell --mode path --time 30 --out cornell-30s.png\n",
-        RT_GRID_AUTO_DENSITY);
+        RT_GRID_AUTO_DENSITY_SPARSE, RT_GRID_SPARSE_MIN_TRIANGLES, RT_GRID_AUTO_DENSITY);
 }
 
 typedef struct cli {

@@ -147,6 +147,14 @@ double rt_grid_edge_quartile(const float *positions, const uint32_t *indices, si
 unsigned rt_grid_auto_min_dim_edge(const float lo[3], const float hi[3], size_t triangles,
                                    double min_edge)
 {
+    return rt_grid_auto_min_dim_density(lo, hi, triangles, min_edge, RT_GRID_AUTO_DENSITY);
+}
+
+unsigned rt_grid_auto_min_dim_density(const float lo[3], const float hi[3], size_t triangles,
+                                      double min_edge, double density)
+{
+    if (!(density > 0.0) || !isfinite(density))
+        density = RT_GRID_AUTO_DENSITY;
     if (!lo || !hi || triangles == 0)
         return RT_GRID_DEFAULT_MIN_DIM;
     double ext[3], max_ext = 0.0;
@@ -169,7 +177,7 @@ unsigned rt_grid_auto_min_dim_edge(const float lo[3], const float hi[3], size_t 
     }
     if (axes == 0)
         return 1;
-    double cells = RT_GRID_AUTO_DENSITY * (double)triangles;
+    double cells = density * (double)triangles;
     if (cells > (double)RT_GRID_AUTO_MAX_CELLS)
         cells = (double)RT_GRID_AUTO_MAX_CELLS;
     /* voxels of edge e: measure / e^axes = cells */

@@ -43,6 +43,16 @@
  *  5 came within about 10% of the best on each. */
 #define RT_GRID_AUTO_DENSITY 5.0
 
+/** The coarser density the ray tracer tries first (rt_tracer_create) for
+ *  meshes of at least RT_GRID_SPARSE_MIN_TRIANGLES triangles: where most
+ *  voxels stay empty, its traversal walks ahead over them and tests a
+ *  voxel's list 16 triangles at a time (rt_lanes.cl), so longer lists cost
+ *  little and fewer voxels save steps. Scenes of a few thousand triangles
+ *  with large walls or floors (glassball, ring) measured slower with it.
+ *  bench/README.md has the figures. */
+#define RT_GRID_AUTO_DENSITY_SPARSE 1.5
+#define RT_GRID_SPARSE_MIN_TRIANGLES 16384u
+
 /** Largest number of voxels a grid may have. */
 #define RT_GRID_MAX_CELLS (1u << 27)
 
@@ -113,6 +123,14 @@ unsigned rt_grid_auto_min_dim(const float lo[3], const float hi[3], size_t trian
  */
 unsigned rt_grid_auto_min_dim_edge(const float lo[3], const float hi[3], size_t triangles,
                                    double min_edge);
+
+/**
+ * rt_grid_auto_min_dim_edge aiming at `density` voxels per triangle instead
+ * of RT_GRID_AUTO_DENSITY (a density that is not positive and finite means
+ * RT_GRID_AUTO_DENSITY).
+ */
+unsigned rt_grid_auto_min_dim_density(const float lo[3], const float hi[3], size_t triangles,
+                                      double min_edge, double density);
 
 /**
  * The lower quartile of the triangles' edge lengths, from at most 4096

@@ -34,20 +34,44 @@ rt_tracer_options rt_tracer_options_default(void)
     return o;
 }
 
-static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
+/* Voxels of the grid in t->grid and how many of them hold triangles. */
+static sluice_status grid_occupancy(rt_tracer *t, uint32_t **start_out, size_t *cells_out,
+                                    size_t *occupied_out, char *err, size_t err_size)
+{
+    const rt_grid_desc *d = &t->grid.desc;
+    size_t cells = (size_t)d->dims[0] * d->dims[1] * d->dims[2], occupied = 0;
+    uint32_t *start = malloc((cells + 1) * sizeof *start);
+    if (!start) {
+        sr_set_error(err, err_size, "out of host memory");
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
+    sluice_status st = sluice_stream_download(t->grid.cell_start, start, cells + 1, NULL);
+    if (st != SLUICE_OK) {
+        sr_set_error(err, err_size, "grid download: %s", sluice_context_error(t->ctx));
+        free(start);
+        return st;
+    }
+    for (size_t c = 0; c < cells; ++c)
+        occupied += start[c] < start[c + 1];
+    if (start_out)
+        *start_out = start;
+    else
+        free(start);
+    *cells_out = cells;
+    *occupied_out = occupied;
+    return SLUICE_OK;
+}
+
+static sluice_status build_grid_dim(rt_tracer *t, unsigned min_dim, char *err, size_t err_size)
 {
     const sr_scene_stats *ss = sr_scene_statistics(t->scene);
     rt_grid_desc desc;
     size_t nt = sr_scene_triangle_count(t->scene);
-    unsigned min_dim = t->opt.grid_min_dim;
-    if (min_dim == RT_GRID_AUTO_MIN_DIM)
-        min_dim = rt_grid_auto_min_dim_edge(
-            ss->bounds_min, ss->bounds_max, nt,
-            rt_grid_edge_quartile(sr_scene_positions(t->scene), sr_scene_indices(t->scene), nt));
     sluice_status st =
         rt_grid_choose(ss->bounds_min, ss->bounds_max, min_dim, &desc, err, err_size);
     if (st != SLUICE_OK)
         return st;
+    t->grid_min_dim = min_dim;
     if (t->opt.grid_build == RT_GRID_BUILD_DEVICE) {
         st = rt_grid_build_device(t->ctx, &desc, t->ds->positions, t->ds->indices, nt, &t->grid);
         if (st != SLUICE_OK)
@@ -63,6 +87,42 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
                 sr_set_error(err, err_size, "grid upload: %s", sluice_context_error(t->ctx));
         }
         rt_grid_host_free(&h);
+    }
+    return st;
+}
+
+/* The grid at the given minimum dimension, or for RT_GRID_AUTO_MIN_DIM the
+ * scene's: with RT_GRID_SPARSE_MIN_TRIANGLES triangles or more, first at
+ * RT_GRID_AUTO_DENSITY_SPARSE voxels per triangle; when that grid is not
+ * sparse (more than half its voxels hold triangles, where the fused mode
+ * goes a voxel at a time), and for smaller scenes, at RT_GRID_AUTO_DENSITY.
+ * Both keep voxels no smaller than the lower quartile of the triangles'
+ * edges (rt_grid_edge_quartile). */
+static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
+{
+    const sr_scene_stats *ss = sr_scene_statistics(t->scene);
+    size_t nt = sr_scene_triangle_count(t->scene);
+    unsigned min_dim = t->opt.grid_min_dim;
+    sluice_status st;
+    if (min_dim != RT_GRID_AUTO_MIN_DIM)
+        st = build_grid_dim(t, min_dim, err, err_size);
+    else {
+        double edge =
+            rt_grid_edge_quartile(sr_scene_positions(t->scene), sr_scene_indices(t->scene), nt);
+        unsigned dense = rt_grid_auto_min_dim_edge(ss->bounds_min, ss->bounds_max, nt, edge);
+        unsigned sparse = nt >= RT_GRID_SPARSE_MIN_TRIANGLES
+                              ? rt_grid_auto_min_dim_density(ss->bounds_min, ss->bounds_max, nt,
+                                                             edge, RT_GRID_AUTO_DENSITY_SPARSE)
+                              : dense;
+        st = build_grid_dim(t, sparse, err, err_size);
+        size_t cells = 0, occupied = 0;
+        if (st == SLUICE_OK && dense != sparse)
+            st = grid_occupancy(t, NULL, &cells, &occupied, err, err_size);
+        if (st == SLUICE_OK && dense != sparse && 2 * occupied > cells) {
+            rt_grid_device_free(&t->grid);
+            memset(&t->grid, 0, sizeof t->grid);
+            st = build_grid_dim(t, dense, err, err_size);
+        }
     }
     if (st != SLUICE_OK)
         return st;
@@ -103,22 +163,10 @@ static sluice_status choose_fused_path(rt_tracer *t, char *err, size_t err_size)
         snprintf(t->fused_path, sizeof t->fused_path, "one ray at a time (watertight test)");
         return SLUICE_OK;
     }
-    const rt_grid_desc *d = &t->grid.desc;
-    size_t cells = (size_t)d->dims[0] * d->dims[1] * d->dims[2], occupied = 0;
-    uint32_t *start = malloc((cells + 1) * sizeof *start);
-    if (!start) {
-        sr_set_error(err, err_size, "out of host memory");
-        return SLUICE_ERROR_OUT_OF_MEMORY;
-    }
-    sluice_status st = sluice_stream_download(t->grid.cell_start, start, cells + 1, NULL);
-    if (st != SLUICE_OK) {
-        sr_set_error(err, err_size, "grid download: %s", sluice_context_error(t->ctx));
-        free(start);
+    size_t cells = 0, occupied = 0;
+    sluice_status st = grid_occupancy(t, NULL, &cells, &occupied, err, err_size);
+    if (st != SLUICE_OK)
         return st;
-    }
-    for (size_t c = 0; c < cells; ++c)
-        occupied += start[c] < start[c + 1];
-    free(start);
     double pct = cells ? 100.0 * (double)occupied / (double)cells : 0.0;
     t->walks_ahead = t->opt.fused_walk == RT_WALK_ON ||
                      (t->opt.fused_walk == RT_WALK_AUTO && 2 * occupied <= cells);
@@ -374,6 +422,11 @@ void rt_tracer_reset_stats(rt_tracer *t)
 {
     if (t)
         memset(&t->stats, 0, sizeof t->stats);
+}
+
+unsigned rt_tracer_grid_min_dim(const rt_tracer *t)
+{
+    return t ? t->grid_min_dim : 0u;
 }
 
 const rt_grid_device *rt_tracer_grid(const rt_tracer *t)

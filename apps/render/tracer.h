@@ -67,7 +67,12 @@ typedef struct rt_tracer_options {
     rt_intersector intersector;
     rt_grid_build grid_build;
     unsigned grid_min_dim;     /**< voxels along the shortest axis (Purcell 5.2.1);
-                                    RT_GRID_AUTO_MIN_DIM (0): rt_grid_auto_min_dim */
+                                    RT_GRID_AUTO_MIN_DIM (0): chosen from the scene,
+                                    RT_GRID_AUTO_DENSITY_SPARSE voxels per triangle
+                                    for meshes of RT_GRID_SPARSE_MIN_TRIANGLES or
+                                    more where most voxels stay empty, else
+                                    RT_GRID_AUTO_DENSITY (rt_grid_auto_min_dim_density,
+                                    with the floor of rt_grid_edge_quartile) */
     float intersect_threshold; /**< stream mode: intersect when I >= this * live */
     unsigned unroll_steps;     /**< stream mode: voxels per traverse pass (k) */
     unsigned unroll_tests;     /**< stream mode: triangle tests per intersect pass (m) */
@@ -149,6 +154,10 @@ void rt_tracer_reset_stats(rt_tracer *t);
 
 /** The grid (its description, cell and triangle-reference counts, bytes). */
 const rt_grid_device *rt_tracer_grid(const rt_tracer *t);
+
+/** The grid's minimum dimension: the options' grid_min_dim, or the one the
+ *  tracer chose for RT_GRID_AUTO_MIN_DIM (0 for a NULL tracer). */
+unsigned rt_tracer_grid_min_dim(const rt_tracer *t);
 
 /** Device bytes the scene's data take (vertices, triangles, materials,
  *  lights, and the tracer's list-order copy of the triangle records), and

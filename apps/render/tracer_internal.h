@@ -15,6 +15,7 @@ struct rt_tracer {
     const sr_scene *scene;
     rt_tracer_options opt;
     rt_grid_device grid;
+    unsigned grid_min_dim; /* the grid's minimum dimension (chosen, or given) */
     rt_grid_args grid_args;
 
     /* the scene on the device: its triangle records are in the layout the
