@@ -35,8 +35,8 @@ rt_tracer_options rt_tracer_options_default(void)
 }
 
 /* Voxels of the grid in t->grid and how many of them hold triangles. */
-static sluice_status grid_occupancy(rt_tracer *t, uint32_t **start_out, size_t *cells_out,
-                                    size_t *occupied_out, char *err, size_t err_size)
+static sluice_status grid_occupancy(rt_tracer *t, size_t *cells_out, size_t *occupied_out,
+                                    char *err, size_t err_size)
 {
     const rt_grid_desc *d = &t->grid.desc;
     size_t cells = (size_t)d->dims[0] * d->dims[1] * d->dims[2], occupied = 0;
@@ -53,10 +53,9 @@ static sluice_status grid_occupancy(rt_tracer *t, uint32_t **start_out, size_t *
     }
     for (size_t c = 0; c < cells; ++c)
         occupied += start[c] < start[c + 1];
-    if (start_out)
-        *start_out = start;
-    else
-        free(start);
+    free(start);
+    t->grid_cells = cells;
+    t->grid_occupied = occupied;
     *cells_out = cells;
     *occupied_out = occupied;
     return SLUICE_OK;
@@ -72,6 +71,7 @@ static sluice_status build_grid_dim(rt_tracer *t, unsigned min_dim, char *err, s
     if (st != SLUICE_OK)
         return st;
     t->grid_min_dim = min_dim;
+    t->grid_cells = t->grid_occupied = 0;
     if (t->opt.grid_build == RT_GRID_BUILD_DEVICE) {
         st = rt_grid_build_device(t->ctx, &desc, t->ds->positions, t->ds->indices, nt, &t->grid);
         if (st != SLUICE_OK)
@@ -117,7 +117,7 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
         st = build_grid_dim(t, sparse, err, err_size);
         size_t cells = 0, occupied = 0;
         if (st == SLUICE_OK && dense != sparse)
-            st = grid_occupancy(t, NULL, &cells, &occupied, err, err_size);
+            st = grid_occupancy(t, &cells, &occupied, err, err_size);
         if (st == SLUICE_OK && dense != sparse && 2 * occupied > cells) {
             rt_grid_device_free(&t->grid);
             memset(&t->grid, 0, sizeof t->grid);
@@ -163,8 +163,9 @@ static sluice_status choose_fused_path(rt_tracer *t, char *err, size_t err_size)
         snprintf(t->fused_path, sizeof t->fused_path, "one ray at a time (watertight test)");
         return SLUICE_OK;
     }
-    size_t cells = 0, occupied = 0;
-    sluice_status st = grid_occupancy(t, NULL, &cells, &occupied, err, err_size);
+    /* counted already when build_grid compared two densities */
+    size_t cells = t->grid_cells, occupied = t->grid_occupied;
+    sluice_status st = cells ? SLUICE_OK : grid_occupancy(t, &cells, &occupied, err, err_size);
     if (st != SLUICE_OK)
         return st;
     double pct = cells ? 100.0 * (double)occupied / (double)cells : 0.0;

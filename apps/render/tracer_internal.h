@@ -15,7 +15,8 @@ struct rt_tracer {
     const sr_scene *scene;
     rt_tracer_options opt;
     rt_grid_device grid;
-    unsigned grid_min_dim; /* the grid's minimum dimension (chosen, or given) */
+    unsigned grid_min_dim;            /* the grid's minimum dimension (chosen, or given) */
+    size_t grid_cells, grid_occupied; /* voxels, and those with triangles (0, 0: not counted) */
     rt_grid_args grid_args;
 
     /* the scene on the device: its triangle records are in the layout the
