@@ -2,11 +2,12 @@
  * Reductions (streams/reduce.c) over contiguous chunks:
  *
  *   pass 1  reduce_part_OP_T   one work-item per chunk reduces its records,
- *                              four at a time, into parts[id]
+ *                              16 at a time (SLUICE_REDUCE16_), into parts[id]
  *   pass 2  reduce_final_OP_T  one work-item reduces parts[0..m) into parts[m]
  *
  * Empty chunks give the identity, so an empty stream reduces to it. Float MIN
- * and MAX use fmin/fmax: a NaN is ignored unless every record is NaN.
+ * and MAX follow fmin/fmax (SLUICE_FMIN_): a NaN is ignored unless every
+ * record is NaN.
  *
  * The input length is `n_fixed` when the host knows it, otherwise the
  * device-side variable vars[in_var]; past `limit` (the capacity) the input
@@ -22,20 +23,15 @@ inline uint reduce_length_(global const uint *vars, uint in_var, uint n_fixed, u
     return n_fixed != REDUCE_NONE ? n_fixed : sluice_stream_length_(vars, in_var, limit);
 }
 
-#define REDUCE_KERNELS(T, T4, NAME, IDENTITY, OP)                                                  \
+#define REDUCE_KERNELS(T, T16, NAME, IDENTITY, OP)                                                 \
     __kernel void reduce_part_##NAME(global const uint *vars, uint in_var, uint n_fixed,           \
                                      uint limit, uint chunk, global const T *in, global T *parts)  \
     {                                                                                              \
         uint n = reduce_length_(vars, in_var, n_fixed, limit);                                     \
         ulong b = (ulong)get_global_id(0) * chunk;                                                 \
         uint begin = (uint)min(b, (ulong)n), end = (uint)min(b + chunk, (ulong)n);                 \
-        T4 acc = (T4)(IDENTITY);                                                                   \
-        uint i = begin;                                                                            \
-        for (; i + 4u <= end; i += 4u)                                                             \
-            acc = OP(acc, vload4(0, in + i));                                                      \
-        T r = OP(OP(acc.s0, acc.s1), OP(acc.s2, acc.s3));                                          \
-        for (; i < end; ++i)                                                                       \
-            r = OP(r, in[i]);                                                                      \
+        T r;                                                                                       \
+        SLUICE_REDUCE16_(T, T16, in, begin, end, IDENTITY, OP, r);                                 \
         parts[get_global_id(0)] = r;                                                               \
         if (get_global_id(0) == 0)                                                                 \
             parts[get_global_size(0) + 1u] = (T)(n_fixed == REDUCE_NONE && vars[in_var] > limit);  \
@@ -51,11 +47,9 @@ inline uint reduce_length_(global const uint *vars, uint in_var, uint n_fixed, u
         parts[m] = r;                                                                              \
     }
 
-#define REDUCE_ADD_(a, b) ((a) + (b))
-
-REDUCE_KERNELS(uint, uint4, sum_u32, 0u, REDUCE_ADD_)
-REDUCE_KERNELS(uint, uint4, min_u32, 0xffffffffu, min)
-REDUCE_KERNELS(uint, uint4, max_u32, 0u, max)
-REDUCE_KERNELS(float, float4, sum_f32, 0.0f, REDUCE_ADD_)
-REDUCE_KERNELS(float, float4, min_f32, INFINITY, fmin)
-REDUCE_KERNELS(float, float4, max_f32, -INFINITY, fmax)
+REDUCE_KERNELS(uint, uint16, sum_u32, 0u, SLUICE_ADD_)
+REDUCE_KERNELS(uint, uint16, min_u32, 0xffffffffu, SLUICE_MIN_)
+REDUCE_KERNELS(uint, uint16, max_u32, 0u, SLUICE_MAX_)
+REDUCE_KERNELS(float, float16, sum_f32, 0.0f, SLUICE_ADD_)
+REDUCE_KERNELS(float, float16, min_f32, INFINITY, SLUICE_FMIN_)
+REDUCE_KERNELS(float, float16, max_f32, -INFINITY, SLUICE_FMAX_)

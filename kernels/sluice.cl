@@ -372,7 +372,58 @@ inline uint8 sluice_pack8_lanes_(uint8 x, uint m)
  * bytes), as a uint16: vload16(0, p) without its 16-wide return value (see
  * above). Apply as_int16 or as_float16 for other 32-bit types. */
 typedef uint16 sluice_uint16_unaligned_ __attribute__((aligned(4)));
+typedef float16 sluice_float16_unaligned_ __attribute__((aligned(4)));
 #define SLUICE_LOAD16(p) (*(global const sluice_uint16_unaligned_ *)(p))
+
+/* Lanes of two 16-lane vectors picked by constant indices (0-15 from a,
+ * 16-31 from b), as OpenCL's shuffle2 but without a call (see above). */
+#if defined(__clang__)
+#define SLUICE_SHUF16_(a, b, ...) __builtin_shufflevector((a), (b), __VA_ARGS__)
+#else
+#define SLUICE_SHUF16_(a, b, ...) shuffle2((a), (b), (uint16)(__VA_ARGS__))
+#endif
+
+/* Lanewise operators for SLUICE_REDUCE16_, on scalars and vectors alike:
+ * operators, not calls (see above). SLUICE_FMIN_ and SLUICE_FMAX_ follow
+ * fmin and fmax: a NaN operand gives the other one (x != x only for NaN). */
+#define SLUICE_ADD_(a, b) ((a) + (b))
+#define SLUICE_MIN_(a, b) ((b) < (a) ? (b) : (a))
+#define SLUICE_MAX_(a, b) ((b) > (a) ? (b) : (a))
+#define SLUICE_FMIN_(a, b) ((((b) < (a)) | ((a) != (a))) ? (b) : (a))
+#define SLUICE_FMAX_(a, b) ((((b) > (a)) | ((a) != (a))) ? (b) : (a))
+
+/* Reduces records [begin, end) of `in` (a global T pointer; T a 32-bit
+ * scalar, T16 its 16-lane vector) with OP (one of the operators above)
+ * into `result`, a T. Sixteen records per step into two accumulators: on a
+ * CPU that keeps the loads ahead of the adds (1.6x four records per step,
+ * bench/README.md). The records are combined in a tree, not in input
+ * order. */
+#define SLUICE_REDUCE16_(T, T16, in, begin, end, identity, OP, result)                             \
+    do {                                                                                           \
+        T16 a_ = (T16)(identity), b_ = a_;                                                         \
+        uint i_ = (begin), e_ = (end);                                                             \
+        for (; i_ + 32u <= e_; i_ += 32u) {                                                        \
+            T16 x_ = *(global const sluice_##T16##_unaligned_ *)((in) + i_);                       \
+            T16 y_ = *(global const sluice_##T16##_unaligned_ *)((in) + i_ + 16u);                 \
+            a_ = OP(a_, x_);                                                                       \
+            b_ = OP(b_, y_);                                                                       \
+        }                                                                                          \
+        a_ = OP(a_, b_);                                                                           \
+        b_ = SLUICE_SHUF16_(a_, a_, 8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7);         \
+        a_ = OP(a_, b_);                                                                           \
+        b_ = SLUICE_SHUF16_(a_, a_, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3);               \
+        a_ = OP(a_, b_);                                                                           \
+        b_ = SLUICE_SHUF16_(a_, a_, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1);               \
+        a_ = OP(a_, b_);                                                                           \
+        b_ = SLUICE_SHUF16_(a_, a_, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0);               \
+        a_ = OP(a_, b_);                                                                           \
+        T r_ = a_.s0;                                                                              \
+        for (; i_ < e_; ++i_) {                                                                    \
+            T x_ = (in)[i_];                                                                       \
+            r_ = OP(r_, x_);                                                                       \
+        }                                                                                          \
+        (result) = r_;                                                                             \
+    } while (0)
 
 /* The mask of the non-zero lanes of `c` (an int16; bit k for lane k), e.g. of
  * a vector comparison such as `x < (float16)t`. */
