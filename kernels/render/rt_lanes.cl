@@ -186,42 +186,61 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
 }
 
 #ifndef RT_WATERTIGHT
-/* a b - c d, and a b + c d + e f, rounded as rt_cross and rt_dot round. */
-inline float16 rt_fms16(float16 a, float16 b, float16 c, float16 d)
-{
-    return fma(a, b, -(c * d));
-}
+/* a b - c d, and a b + c d + e f, rounded as rt_cross and rt_dot round
+ * (any vector width). */
+#define RT_FMS_(a, b, c, d) fma((a), (b), -((c) * (d)))
+#define RT_DOT_(a, b, c, d, e, f) fma((e), (f), fma((c), (d), (a) * (b)))
 
-inline float16 rt_dot16(float16 a, float16 b, float16 c, float16 d, float16 e, float16 f)
-{
-    return fma(e, f, fma(c, d, a * b));
-}
+/* The Moller-Trumbore test of rt_intersect_tri, lanewise on vectors of type
+ * F (floats) and I (ints) of one width: rays (o, d, tmin) against triangles
+ * (v0, e1, e2) in the lanes of mask m, keeping hits nearer than t and not
+ * past limit in (tri, t, u, v), which are lvalues. */
+#define RT_MT_(F, I, itri, mask, ox, oy, oz, dx, dy, dz, tmin, limit, tri, t, u, v, v0x, v0y, v0z,  \
+               e1x, e1y, e1z, e2x, e2y, e2z)                                                       \
+    do {                                                                                           \
+        F pvx_ = RT_FMS_(dy, e2z, dz, e2y), pvy_ = RT_FMS_(dz, e2x, dx, e2z),                      \
+          pvz_ = RT_FMS_(dx, e2y, dy, e2x);                                                        \
+        F det_ = RT_DOT_(e1x, pvx_, e1y, pvy_, e1z, pvz_);                                         \
+        I m_ = (mask) & (det_ != 0.0f);                                                            \
+        F inv_ = 1.0f / det_;                                                                      \
+        F sx_ = (ox) - (v0x), sy_ = (oy) - (v0y), sz_ = (oz) - (v0z);                              \
+        F u_ = RT_DOT_(sx_, pvx_, sy_, pvy_, sz_, pvz_) * inv_;                                    \
+        m_ &= ~((u_ < 0.0f) | (u_ > 1.0f));                                                        \
+        F qx_ = RT_FMS_(sy_, e1z, sz_, e1y), qy_ = RT_FMS_(sz_, e1x, sx_, e1z),                    \
+          qz_ = RT_FMS_(sx_, e1y, sy_, e1x);                                                       \
+        F v_ = RT_DOT_(dx, qx_, dy, qy_, dz, qz_) * inv_;                                          \
+        m_ &= ~((v_ < 0.0f) | (u_ + v_ > 1.0f));                                                   \
+        F t_ = RT_DOT_(e2x, qx_, e2y, qy_, e2z, qz_) * inv_;                                       \
+        m_ &= (t_ >= (tmin)) & (t_ <= (limit)) & (t_ < (t));                                       \
+        tri = select(tri, itri, m_);                                                               \
+        t = select(t, t_, m_);                                                                     \
+        u = select(u, u_, m_);                                                                     \
+        v = select(v, v_, m_);                                                                     \
+    } while (0)
+
+/* RT_MT_ on the half h (lo or hi) of 16 lanes, 8 lanes wide. */
+#define RT_MT_HALF_(h, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z)              \
+    RT_MT_(float8, int8, (tri).h, (m).h, (P)->ox.h, (P)->oy.h, (P)->oz.h, (P)->dx.h, (P)->dy.h,    \
+           (P)->dz.h, (P)->tmin.h, (limit).h, (P)->tri.h, (P)->t.h, (P)->u.h, (P)->v.h, (v0x).h,   \
+           (v0y).h, (v0z).h, (e1x).h, (e1y).h, (e1z).h, (e2x).h, (e2y).h, (e2z).h)
 
 /* The Moller-Trumbore test of rt_intersect_tri in the lanes where m is set,
- * against the triangle (v0, e1, e2) of each lane; keeps hits in P. */
+ * against the triangle (v0, e1, e2) of each lane; keeps hits in P. With
+ * AVX2 the 16 lanes go as two halves of 8, each one register wide: on
+ * 16-lane vectors the compiler packed the comparisons' masks into bytes and
+ * unpacked them for every select. */
 __attribute__((always_inline)) inline void
 rt_intersect16_core(int16 tri, int16 m, rt_packet *P, float16 limit, float16 v0x, float16 v0y,
                     float16 v0z, float16 e1x, float16 e1y, float16 e1z, float16 e2x, float16 e2y,
                     float16 e2z)
 {
-    float16 pvx = rt_fms16(P->dy, e2z, P->dz, e2y), pvy = rt_fms16(P->dz, e2x, P->dx, e2z),
-            pvz = rt_fms16(P->dx, e2y, P->dy, e2x);
-    float16 det = rt_dot16(e1x, pvx, e1y, pvy, e1z, pvz);
-    m &= det != 0.0f;
-    float16 inv = 1.0f / det;
-    float16 sx = P->ox - v0x, sy = P->oy - v0y, sz = P->oz - v0z;
-    float16 u = rt_dot16(sx, pvx, sy, pvy, sz, pvz) * inv;
-    m &= ~((u < 0.0f) | (u > 1.0f));
-    float16 qx = rt_fms16(sy, e1z, sz, e1y), qy = rt_fms16(sz, e1x, sx, e1z),
-            qz = rt_fms16(sx, e1y, sy, e1x);
-    float16 v = rt_dot16(P->dx, qx, P->dy, qy, P->dz, qz) * inv;
-    m &= ~((v < 0.0f) | (u + v > 1.0f));
-    float16 t = rt_dot16(e2x, qx, e2y, qy, e2z, qz) * inv;
-    m &= (t >= P->tmin) & (t <= limit) & (t < P->t);
-    P->tri = select(P->tri, tri, m);
-    P->t = select(P->t, t, m);
-    P->u = select(P->u, u, m);
-    P->v = select(P->v, v, m);
+#ifdef RT_AVX2_
+    RT_MT_HALF_(lo, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
+    RT_MT_HALF_(hi, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
+#else
+    RT_MT_(float16, int16, tri, m, P->ox, P->oy, P->oz, P->dx, P->dy, P->dz, P->tmin, limit, P->tri,
+           P->t, P->u, P->v, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
+#endif
 }
 
 /* rt_intersect16 for one triangle that every lane of m tests (broadcast). */
