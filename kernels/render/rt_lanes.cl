@@ -235,8 +235,13 @@ rt_intersect16_core(int16 tri, int16 m, rt_packet *P, float16 limit, float16 v0x
                     float16 e2z)
 {
 #ifdef RT_AVX2_
-    RT_MT_HALF_(lo, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
-    RT_MT_HALF_(hi, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
+    /* a half with no lane to test is skipped: short lists in the turned
+     * test (rt_intersect16_turned), small groups of rays */
+    uint mm = sluice_mask16(m);
+    if (mm & 0xffu)
+        RT_MT_HALF_(lo, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
+    if (mm >> 8)
+        RT_MT_HALF_(hi, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
 #else
     RT_MT_(float16, int16, tri, m, P->ox, P->oy, P->oz, P->dx, P->dy, P->dz, P->tmin, limit, P->tri,
            P->t, P->u, P->v, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
