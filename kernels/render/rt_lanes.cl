@@ -195,7 +195,7 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
  * F (floats) and I (ints) of one width: rays (o, d, tmin) against triangles
  * (v0, e1, e2) in the lanes of mask m, keeping hits nearer than t and not
  * past limit in (tri, t, u, v), which are lvalues. */
-#define RT_MT_(F, I, itri, mask, ox, oy, oz, dx, dy, dz, tmin, limit, tri, t, u, v, v0x, v0y, v0z,  \
+#define RT_MT_(F, I, itri, mask, ox, oy, oz, dx, dy, dz, tmin, limit, tri, t, u, v, v0x, v0y, v0z, \
                e1x, e1y, e1z, e2x, e2y, e2z)                                                       \
     do {                                                                                           \
         F pvx_ = RT_FMS_(dy, e2z, dz, e2y), pvy_ = RT_FMS_(dz, e2x, dx, e2z),                      \
