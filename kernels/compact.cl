@@ -25,9 +25,8 @@
  * load both before emitting either. The compiler cannot move a load above
  * an emission's store itself (input and output could alias, as far as it
  * knows), so without this each block's loads wait behind the previous
- * block's stores. With AVX2 kernels that made the ordered split 10-18%
- * faster (interleaved runs on a 2-core Xeon, bench/README.md); with AVX-512
- * it is within noise. */
+ * block's stores. It matters with AVX2 kernels (measured in
+ * bench/README.md, bench_streams). */
 __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint *flags,
                          global uint *out)
 {

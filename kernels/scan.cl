@@ -11,10 +11,10 @@
  * On a CPU a work-item walking a contiguous chunk runs like a C loop. Both
  * record passes go 16 records per step (sluice.cl's SLUICE_REDUCE16_ and
  * SCAN_PREFIX16_ below): pass 1 with two 16-lane accumulators, pass 3 with a
- * prefix sum of the 16 lanes in four shifted adds. Against four records per
- * step, pass 1 ran 1.6x and pass 3 1.2-1.3x faster on a 2-core Xeon with
- * AVX-512 or AVX2 kernels (bench/README.md). Float sums are associated in a
- * different order than a serial loop's, in shorter chains.
+ * prefix sum of the 16 lanes in four shifted adds; both measured faster
+ * than four records per step with AVX-512 and AVX2 kernels (bench/README.md,
+ * bench_streams). Float sums are associated in a different order than a
+ * serial loop's, in shorter chains.
  *
  * The input length is `n_fixed` when the host knows it, otherwise the
  * device-side variable vars[in_var]; past `limit` (the capacity) the input

@@ -395,9 +395,9 @@ typedef float16 sluice_float16_unaligned_ __attribute__((aligned(4)));
 /* Reduces records [begin, end) of `in` (a global T pointer; T a 32-bit
  * scalar, T16 its 16-lane vector) with OP (one of the operators above)
  * into `result`, a T. Sixteen records per step into two accumulators: on a
- * CPU that keeps the loads ahead of the adds (1.6x four records per step,
- * bench/README.md). The records are combined in a tree, not in input
- * order. */
+ * CPU that keeps the loads ahead of the adds (measured against four records
+ * per step in bench/README.md, bench_streams). The records are combined in
+ * a tree, not in input order. */
 #define SLUICE_REDUCE16_(T, T16, in, begin, end, identity, OP, result)                             \
     do {                                                                                           \
         T16 a_ = (T16)(identity), b_ = a_;                                                         \

@@ -101,8 +101,8 @@ __kernel void radix_scan(global uint *table, uint offset, uint count)
  * when its last record went in: the write-out reads the buffer with vector
  * loads, and right after the 16 single-word stores that filled it those
  * loads wait for the stores to reach the cache (no store forwarding from
- * several stores to one load). Writing out at once, a `perf` profile put
- * half the scatter's time on that first load. */
+ * several stores to one load): profiled and measured in bench/README.md
+ * (bench_streams). */
 #define WC 16u
 
 /* Writes the WC buffered records of digit d (buffer buf) to out + pos[d]. */
