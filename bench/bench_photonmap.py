@@ -50,13 +50,13 @@ def cpu_name():
 FAST = ["--exec", "fused", "--shells-per-pass", "all"]
 
 
-def run(exe, scene, s, build, quick, tmp, extra=()):
+def run(exe, scene, s, build, quick, tmp, extra=(), device=None):
     stats = os.path.join(tmp, "s.json")
     size = "128x96" if quick else s["size"]
     cmd = [exe, "--scene", scene, "--size", size, "--photons", str(s["photons"]),
            "--k", str(s["k"]), "--grid", s["grid"], "--light-samples", str(s["light_samples"]),
            "--map", build, "--out", os.path.join(tmp, "img.png"), "--stats", stats, "--quiet",
-           "--no-profile"] + list(extra)
+           "--no-profile"] + list(extra) + (["--device", device] if device else [])
     subprocess.run(cmd, check=True)
     with open(stats) as f:
         return json.load(f)
@@ -67,15 +67,19 @@ def main():
     ap.add_argument("--exe", default="build/apps/photonmap/sluice-photonmap")
     ap.add_argument("--out", default="bench/results/photonmap.json")
     ap.add_argument("--quick", action="store_true", help="small images, for the smoke test")
+    ap.add_argument("--device", help="OpenCL device (substring of \"platform / device\"; "
+                    "default: the first CPU device)")
     a = ap.parse_args()
+    device = None
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for scene, s in PURCELL.items():
             for build, options in [(b, o) for o in ("default", "fast")
                                    for b in ("bitonic", "stencil", "count")]:
                 extra = FAST if options == "fast" else ()
-                run(a.exe, scene, s, build, True, tmp, extra)  # warm the kernel cache
-                r = run(a.exe, scene, s, build, a.quick, tmp, extra)
+                run(a.exe, scene, s, build, True, tmp, extra, a.device)  # warm the kernel cache
+                r = run(a.exe, scene, s, build, a.quick, tmp, extra, a.device)
+                device = r.get("device", device)
                 ph = r["phases"]
                 row = {"scene": scene, "build": build, "options": options,
                        "size": s["size"] if not a.quick else "128x96",
@@ -94,7 +98,7 @@ def main():
                                                   ph["total"],
                                                   "  Purcell %5.1f s: %.0fx" % (s[build], row["speedup"])
                                                   if build in s else ""))
-    res = {"cpu": cpu_name(), "command": " ".join(sys.argv), "quick": a.quick, "results": rows}
+    res = {"cpu": cpu_name(), "device": device, "command": " ".join(sys.argv), "quick": a.quick, "results": rows}
     with open(a.out, "w") as f:
         json.dump(res, f, indent=1)
         f.write("\n")

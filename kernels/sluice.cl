@@ -376,11 +376,17 @@ typedef float16 sluice_float16_unaligned_ __attribute__((aligned(4)));
 #define SLUICE_LOAD16(p) (*(global const sluice_uint16_unaligned_ *)(p))
 
 /* Lanes of two 16-lane vectors picked by constant indices (0-15 from a,
- * 16-31 from b), as OpenCL's shuffle2 but without a call (see above). */
+ * 16-31 from b), as OpenCL's shuffle2 but without a call (see above).
+ * Sixteen named index parameters, not `...`: OpenCL C 1.2 has no variadic
+ * macros, and NVIDIA's compiler refuses them. */
 #if defined(__clang__)
-#define SLUICE_SHUF16_(a, b, ...) __builtin_shufflevector((a), (b), __VA_ARGS__)
+#define SLUICE_SHUF16_(a, b, i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13, i14, i15) \
+    __builtin_shufflevector((a), (b), i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13,   \
+                            i14, i15)
 #else
-#define SLUICE_SHUF16_(a, b, ...) shuffle2((a), (b), (uint16)(__VA_ARGS__))
+#define SLUICE_SHUF16_(a, b, i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13, i14, i15) \
+    shuffle2((a), (b),                                                                             \
+             (uint16)(i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13, i14, i15))
 #endif
 
 /* Lanewise operators for SLUICE_REDUCE16_, on scalars and vectors alike:

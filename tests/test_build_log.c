@@ -157,6 +157,55 @@ static void check_cases(void)
     CHECK(!sl_build_log_is_count("2 kernels generated.\nan error", 20), "no count past the line");
 }
 
+/* The log NVIDIA's compiler wrote for a source it was handed with #line
+ * directives, which it ignores (nvidia-h100.log): relocated through a source
+ * with the directives on the same lines (1 and 531), its locations name the
+ * user's file and lines, and its digest leads with them. Also: lines before
+ * any directive, a directive's own start line, a broken directive, no
+ * source, and lines that already name a file. */
+static void check_relocate(void)
+{
+    char *file = read_data("nvidia-h100.log");
+    char *expected = read_data("nvidia-h100.expected");
+    char *source = malloc(2048);
+    if (!file || !expected || !source) {
+        free(file);
+        free(expected);
+        free(source);
+        return;
+    }
+    char *p = source + sprintf(source, "#line 1 \"sluice.cl\"\n");
+    for (int line = 2; line < 531; ++line)
+        *p++ = '\n';
+    sprintf(p, "#line 1 \"two.cl\"\n#include \"sluice.cl\"\n#warning sluice test warning\n");
+    char *log = strstr(file, "\n----\n");
+    CHECK(log != NULL, "nvidia-h100.log has no ---- line after its header");
+    log = log ? log + 6 : file;
+    char *moved = sl_build_log_relocate(log, source);
+    CHECK(moved && strncmp(moved, "two.cl:2:2: warning: sluice test warning\n#warning", 48) == 0,
+          "NVIDIA, relocated, source lines kept: [%s]", moved ? moved : "(null)");
+    char *got = sl_build_log_digest(moved, "two.cl", false, NULL);
+    CHECK(got && strcmp(got, expected) == 0, "NVIDIA, relocated digest: got [%s], want [%s]",
+          got ? got : "(null)", expected);
+    free(got);
+    free(moved);
+    moved = sl_build_log_relocate(log, NULL);
+    CHECK(moved && strcmp(moved, log) == 0, "no source: the log unchanged");
+    free(moved);
+    moved = sl_build_log_relocate("<kernel>:1:2: error: x\n<kernel>:3:4: error: y\n:9: note: z\n"
+                                  "my.cl:3:1: error: named\n  <kernel>:3:4: excerpt",
+                                  "#line 1 \"sluice.cl\"\nint a;\nint b;\n#line 7 \"my.cl\"\nz\n"
+                                  "w\n#line 2 \"bad\nq\n");
+    CHECK(moved && strcmp(moved, "<kernel>:1:2: error: x\nsluice.cl:2:4: error: y\nmy.cl:11: note: "
+                                 "z\nmy.cl:3:1: error: named\n  <kernel>:3:4: excerpt") == 0,
+          "before any directive, after one, no column, named, excerpt: [%s]",
+          moved ? moved : "(null)");
+    free(moved);
+    free(source);
+    free(file);
+    free(expected);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 2) {
@@ -168,5 +217,6 @@ int main(int argc, char **argv)
     check_sample("nvidia", 1);
     check_sample("amd", 1);
     check_cases();
+    check_relocate();
     return check_summary();
 }

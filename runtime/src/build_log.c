@@ -217,6 +217,48 @@ static bool text_has_line(const text *t, const char *line, size_t n)
     return false;
 }
 
+/* A `#line N "FILE"` directive of the source handed to the compiler: the
+ * source's line `at` holds it, so its line at + 1 is FILE's line N. */
+typedef struct line_mark {
+    unsigned long at, line;
+    const char *file;
+    size_t file_len;
+} line_mark;
+
+/* The #line directives of `source` (NULL when there are none, or on a
+ * failed allocation: locations are then left as the compiler gave them). */
+static line_mark *find_line_marks(const char *source, size_t *count)
+{
+    *count = 0;
+    line_mark *marks = NULL;
+    size_t cap = 0;
+    unsigned long at = 1;
+    for (const char *s = source; s && *s; ++at) {
+        const char *nl = strchr(s, '\n');
+        size_t len = nl ? (size_t)(nl - s) : strlen(s), i = 0;
+        unsigned long n;
+        if (starts_with(s, len, "#line ") && (i = 6, parse_number(s, len, &i, &n)) && i + 2 < len &&
+            s[i] == ' ' && s[i + 1] == '"') {
+            const char *f = s + i + 2, *q = memchr(f, '"', len - i - 2);
+            if (q) {
+                if (*count == cap) {
+                    cap = cap ? 2 * cap : 4;
+                    line_mark *m = realloc(marks, cap * sizeof *m);
+                    if (!m) {
+                        free(marks);
+                        *count = 0;
+                        return NULL;
+                    }
+                    marks = m;
+                }
+                marks[(*count)++] = (line_mark){at, n, f, (size_t)(q - f)};
+            }
+        }
+        s += len + (nl ? 1 : 0);
+    }
+    return marks;
+}
+
 /* Appends d in the common shape, unless that line is already there. */
 static void add_diag(text *t, const diag *d, const char *name)
 {
@@ -282,6 +324,46 @@ char *sl_build_log_digest(const char *log, const char *name, bool with_warnings,
             s += len + (nl ? 1 : 0);
         }
     }
+    if (out.failed) {
+        free(out.buf);
+        return NULL;
+    }
+    return out.buf;
+}
+
+char *sl_build_log_relocate(const char *log, const char *source)
+{
+    size_t nmarks;
+    line_mark *marks = find_line_marks(source, &nmarks);
+    text out = {NULL, 0, 0, false};
+    text_add(&out, "", 0);
+    for (const char *s = log ? log : ""; *s;) {
+        const char *nl = strchr(s, '\n');
+        size_t len = nl ? (size_t)(nl - s) : strlen(s), used = 0, k = nmarks;
+        diag d;
+        memset(&d, 0, sizeof d);
+        bool loc = parse_location(s, len, &d, &used) && is_placeholder(d.file, d.file_len);
+        while (loc && k > 0 && marks[k - 1].at >= d.line)
+            --k;
+        if (loc && k > 0) {
+            /* The directive on line `at` makes line at + 1 its file's line N. */
+            char where[48];
+            unsigned long line = marks[k - 1].line + (d.line - marks[k - 1].at - 1);
+            if (d.col)
+                snprintf(where, sizeof where, ":%lu:%lu", line, d.col);
+            else
+                snprintf(where, sizeof where, ":%lu", line);
+            text_add(&out, marks[k - 1].file, marks[k - 1].file_len);
+            text_add(&out, where, strlen(where));
+            text_add(&out, s + used - 2, len - (used - 2));
+        } else {
+            text_add(&out, s, len);
+        }
+        if (nl)
+            text_add(&out, "\n", 1);
+        s += len + (nl ? 1 : 0);
+    }
+    free(marks);
     if (out.failed) {
         free(out.buf);
         return NULL;

@@ -35,6 +35,16 @@
  * asked for), or NULL when out of memory. */
 char *sl_build_log_digest(const char *log, const char *name, bool with_warnings, bool *more);
 
+/* The log with the locations a compiler gave in its placeholder for the
+ * source (`<kernel>:533:2: warning: ...`) mapped through the `#line N
+ * "FILE"` directives of `source`, the text that was handed to it, to
+ * `FILE:LINE:COL: warning: ...`. Compilers that ignore the directives
+ * (NVIDIA's) count lines of the whole text; those that follow them already
+ * give the names (PoCL), and their lines pass unchanged, as does every line
+ * when `source` has no directive. Returns a malloc'd string, or NULL when
+ * out of memory. */
+char *sl_build_log_relocate(const char *log, const char *source);
+
 /* Is this clang's count of diagnostics, "2 warnings generated." or "1
  * warning and 1 error generated." (a trailing newline allowed)? PoCL's
  * compiler writes it on stderr, others at the end of their log. */

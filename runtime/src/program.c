@@ -281,6 +281,12 @@ sluice_status sluice_program_build(sluice_program *p)
         log[0] = 0;
         clGetProgramBuildInfo(prog, ctx->device, CL_PROGRAM_BUILD_LOG, log_size, log, NULL);
         log[log_size] = 0;
+        /* Locations in NVIDIA's "<kernel>" become our file names and lines. */
+        char *relocated = sl_build_log_relocate(log, p->source);
+        if (relocated) {
+            free(log);
+            log = relocated;
+        }
         free(p->log);
         p->log = log;
     }
