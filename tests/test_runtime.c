@@ -987,6 +987,29 @@ static void test_fill(sluice_context *ctx)
     CHECK(sluice_stream_fill(NULL, "x", 1) == SLUICE_ERROR_INVALID_ARGUMENT, "NULL stream");
 }
 
+/* SLUICE_CHUNK fixes the records per work-item: a number that is not one is
+ * refused with a message naming the variable; an odd chunk (7 records)
+ * splits as the default does, ordered and unordered. */
+static void test_chunk_env(void)
+{
+    sluice_context *c = NULL;
+    char msg[256] = "";
+    setenv("SLUICE_CHUNK", "12x", 1);
+    CHECK(sluice_context_create(NULL, &c, msg, sizeof msg) == SLUICE_ERROR_INVALID_ARGUMENT && !c,
+          "SLUICE_CHUNK=12x refused");
+    CHECK(strstr(msg, "SLUICE_CHUNK") != NULL, "the message names the variable: %s", msg);
+    setenv("SLUICE_CHUNK", "7", 1);
+    c = check_context(0);
+    sluice_program *p = program(c);
+    for (int m = 0; m < 2; ++m) {
+        test_split(c, p, 1025, 0, m ? SLUICE_UNORDERED : SLUICE_ORDERED);
+        test_split(c, p, 65537, 3, m ? SLUICE_UNORDERED : SLUICE_ORDERED);
+    }
+    sluice_program_destroy(p);
+    sluice_context_destroy(c);
+    unsetenv("SLUICE_CHUNK");
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
@@ -1010,5 +1033,6 @@ int main(void)
     sluice_program_destroy(p);
     sluice_context_destroy(ctx);
     test_profile();
+    test_chunk_env();
     return check_summary();
 }

@@ -164,6 +164,16 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
         opt.no_simd = 1;
     if (env_on("SLUICE_VERBOSE"))
         opt.verbose = 1;
+    const char *chunk_env = getenv("SLUICE_CHUNK");
+    if (!opt.chunk && chunk_env && *chunk_env) {
+        char *end;
+        unsigned long c = strtoul(chunk_env, &end, 10);
+        if (*end || c == 0 || c > (1ul << 24)) {
+            set_msg(error, error_size, "SLUICE_CHUNK must be a number of records, 1 .. 16777216");
+            return SLUICE_ERROR_INVALID_ARGUMENT;
+        }
+        opt.chunk = (unsigned)c;
+    }
 
     pick_state ps = {opt.device, 1, NULL, NULL, 0};
     sluice_status st = for_each_device(pick_visit, &ps);

@@ -113,7 +113,8 @@ typedef struct sluice_context_options {
      *  statistics (sluice_profile_print). Also enabled by SLUICE_PROFILE=1. */
     int profile;
     /** Records each work-item handles in one launch (0: chosen per launch
-     *  from the stream size). Larger chunks mean fewer atomics. */
+     *  from the stream size). Larger chunks mean fewer atomics. Also set
+     *  by SLUICE_CHUNK=N, for measuring. */
     unsigned chunk;
     /** Non-zero: build every program with SLUICE_NO_SIMD defined, so kernels
      *  use only portable OpenCL C and no device-specific fast paths (see
@@ -273,7 +274,10 @@ void sluice_program_destroy(sluice_program *program);
  * names the source `<kernel>` or the like); warnings only in verbose mode.
  * A line "building my.cl failed ..." follows, then the compiler's own log
  * when it holds more (source excerpts, notes) or in verbose mode. That log,
- * as the compiler wrote it, is in sluice_program_build_log().
+ * as the compiler wrote it, is in sluice_program_build_log(), except that
+ * locations a compiler gives in its own name for the source, counting the
+ * lines of the whole text it was handed (NVIDIA's `<kernel>:533:2:`), are
+ * rewritten to the file and line they are in (`my.cl:2:2:`).
  *
  * A build that succeeds prints nothing, warnings or not: they are in the
  * build log. (With the verbose option or SLUICE_VERBOSE=1 the log is printed
