@@ -381,7 +381,7 @@ typedef float16 sluice_float16_unaligned_ __attribute__((aligned(4)));
  * macros, and NVIDIA's compiler refuses them. */
 #if defined(__clang__)
 #define SLUICE_SHUF16_(a, b, i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13, i14, i15) \
-    __builtin_shufflevector((a), (b), i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13,   \
+    __builtin_shufflevector((a), (b), i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13,  \
                             i14, i15)
 #else
 #define SLUICE_SHUF16_(a, b, i0, i1, i2, i3, i4, i5, i6, i7, i8, i9, i10, i11, i12, i13, i14, i15) \
