@@ -6,6 +6,7 @@
  */
 #include "cli.h"
 #include "clock.h"
+#include "json.h"
 #include "photonmap.h"
 #include "progressive.h"
 
@@ -272,14 +273,6 @@ static sluice_status write_pass_image(void *user, const sr_image *img, unsigned 
 
 static const char *const map_names[] = {"count", "bitonic", "stencil"};
 
-/* Writes `s` inside a JSON string: quotes and backslashes escaped, control
- * characters replaced. */
-static void json_chars(FILE *f, const char *s)
-{
-    for (const char *q = s; *q; ++q)
-        fprintf(f, (*q == '"' || *q == '\\') ? "\\%c" : ((unsigned char)*q < 32 ? "?" : "%c"), *q);
-}
-
 /* The statistics as text (table) or JSON (same figures). */
 static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_renderer *r,
                    double total, unsigned spp, sluice_context *ctx)
@@ -357,12 +350,12 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
     }
     sluice_device_info dev = {0};
     sluice_context_device(ctx, &dev);
-    fprintf(f, "{\n  \"program\": \"" PROG "\",\n  \"device\": \"");
-    json_chars(f, dev.name);
-    fprintf(f, "\",\n  \"scene\": \"");
-    json_chars(f, c->common.scene);
+    fprintf(f, "{\n  \"program\": \"" PROG "\",\n  \"device\": ");
+    sr_json_string(f, dev.name);
+    fprintf(f, ",\n  \"scene\": ");
+    sr_json_string(f, c->common.scene);
     fprintf(f,
-            "\",\n  \"width\": %u, \"height\": %u, \"spp\": %u, \"map\": \"%s\", \"knn\": "
+            ",\n  \"width\": %u, \"height\": %u, \"spp\": %u, \"map\": \"%s\", \"knn\": "
             "\"%s\", \"k\": %u, \"max_radius\": %g,\n",
             o->width, o->height, spp, map_names[o->map],
             o->progressive ? "radius" : (o->knn == PM_KNN_EXACT ? "exact" : "atleast"), o->k,

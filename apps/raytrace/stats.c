@@ -1,6 +1,8 @@
 /* See stats.h. */
 #include "stats.h"
 
+#include "json.h"
+
 #include <errno.h>
 #include <string.h>
 
@@ -62,20 +64,6 @@ void rt_stats_print(const rt_stats_report *r, sluice_context *ctx, FILE *out)
         sluice_profile_print(ctx, out);
 }
 
-static void json_string(FILE *f, const char *s)
-{
-    fputc('"', f);
-    for (; s && *s; ++s) {
-        if (*s == '"' || *s == '\\')
-            fprintf(f, "\\%c", *s);
-        else if ((unsigned char)*s < 0x20)
-            fprintf(f, "\\u%04x", (unsigned char)*s);
-        else
-            fputc(*s, f);
-    }
-    fputc('"', f);
-}
-
 sluice_status rt_stats_write_json(const rt_stats_report *r, sluice_context *ctx, const char *path,
                                   char *err, size_t err_size)
 {
@@ -88,7 +76,7 @@ sluice_status rt_stats_write_json(const rt_stats_report *r, sluice_context *ctx,
     const rt_trace_stats *t = r->trace;
     uint64_t rays = total_rays(r);
     fprintf(f, "{\n  \"scene\": ");
-    json_string(f, r->scene);
+    sr_json_string(f, r->scene);
     fprintf(f, ",\n  \"mode\": \"%s\",\n  \"exec\": \"%s\",\n  \"intersector\": \"%s\",\n", r->mode,
             r->exec, r->intersector);
     fprintf(f, "  \"width\": %u,\n  \"height\": %u,\n  \"spp\": %u,\n  \"interrupted\": %s,\n",
@@ -123,9 +111,9 @@ sluice_status rt_stats_write_json(const rt_stats_report *r, sluice_context *ctx,
     fprintf(f, "  \"nonfinite_contributions\": %llu,\n  \"nonfinite_pixels\": %zu,\n",
             (unsigned long long)r->render->nonfinite, r->bad_pixels);
     fprintf(f, "  \"fused_traversal\": ");
-    json_string(f, r->fused_path ? r->fused_path : "");
+    sr_json_string(f, r->fused_path ? r->fused_path : "");
     fprintf(f, ",\n  \"skipped\": ");
-    json_string(f, r->skipped);
+    sr_json_string(f, r->skipped);
     fprintf(f, ",\n");
     if (r->sampling) {
         sr_adaptive_write_json(r->sampling, f, 2);
@@ -138,7 +126,7 @@ sluice_status rt_stats_write_json(const rt_stats_report *r, sluice_context *ctx,
         if (sluice_profile_get(ctx, i, &e) != SLUICE_OK)
             continue;
         fprintf(f, "%s\n    {\"name\": ", i ? "," : "");
-        json_string(f, e.name);
+        sr_json_string(f, e.name);
         fprintf(f,
                 ", \"launches\": %llu, \"records_in\": %llu, \"records_out\": %llu, "
                 "\"seconds\": %.6g}",
