@@ -29,6 +29,12 @@
  * instead, the host scans it, and a second launch writes at the scanned
  * offsets, so records keep the order of the input.
  *
+ * On a GPU (the runtime's interleaved layout, sluice_layout in sluice.h)
+ * the work-items of a group take the records of their chunks together, one
+ * in every G (the group size) each, so that neighbouring work-items read
+ * neighbouring records; launches with ordered outputs, and bodies written
+ * with SLUICE_FOR_EACH_RANGE, keep a contiguous chunk per work-item.
+ *
  * Rules for a body that emits:
  *   - It runs twice per record (count pass, write pass) and must emit the same
  *     records both times: it must be deterministic and must not depend on what
@@ -90,6 +96,7 @@ typedef struct sluice_launch_ {
     uint stride;       /* chunks + 1: scratch row length per ordered output */
     uint in_cap;       /* input capacity: a device length past it (overflow) voids the launch */
     uint n_map;        /* mapped outputs whose length the launch sets (n_fixed is SLUICE_NONE) */
+    uint interleave;   /* 1: SLUICE_FOR_EACH interleaves its records within a work-group */
     uint out_var[SLUICE_MAX_OUTPUTS]; /* output lengths in the pool */
     uint out_cap[SLUICE_MAX_OUTPUTS]; /* output capacities (records) */
     uint map_var[SLUICE_MAX_OUTPUTS]; /* the lengths of those mapped outputs */
@@ -97,7 +104,8 @@ typedef struct sluice_launch_ {
 
 /* Per-work-item state of one launch. */
 typedef struct sluice_state_ {
-    uint begin, end; /* the chunk: records [begin, end) */
+    uint begin, end; /* the chunk: records begin, begin + step, ... before end */
+    uint step;       /* 1 (contiguous), or the work-group size (interleaved) */
     uint pass;       /* 0: count, 1: write */
     uint chunk_id;
     uint cnt[SLUICE_MAX_OUTPUTS]; /* records this chunk emits, per output */
@@ -128,8 +136,17 @@ inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint
             1u + (vars[L->in_var] == SLUICE_VOID_ ? vars[L->in_var + 1u] : L->in_var);
 }
 
+/* The records of this work-item. Contiguous chunks (`range`, or a launch
+ * without `interleave`): work-item i takes [i chunk, (i + 1) chunk), the
+ * layout for CPUs, where one work-item walking its chunk runs like a C loop.
+ * Interleaved (the layout for GPUs, whose work-items run in lockstep groups
+ * and read memory together): a work-group takes the same records as its
+ * work-items' chunks together, and work-item l of it takes every G-th of
+ * them from the l-th (G the work-group size), so neighbouring work-items
+ * read neighbouring records. The host interleaves only launches without
+ * ordered outputs, which rely on each chunk being contiguous. */
 inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
-                          const sluice_launch_ *L)
+                          const sluice_launch_ *L, int range)
 {
     uint n = L->n_fixed;
     if (n == SLUICE_NONE) {
@@ -138,10 +155,19 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
             sluice_set_lengths_(vars, L, n);
     }
     uint id = (uint)get_global_id(0);
-    ulong b = (ulong)id * L->chunk;
     s->chunk_id = id;
-    s->begin = (uint)min(b, (ulong)n);
-    s->end = (uint)min(b + L->chunk, (ulong)n);
+    if (L->interleave && !range) {
+        uint l = (uint)get_local_id(0), g = (uint)get_local_size(0);
+        ulong tile = (ulong)(id - l) * L->chunk;
+        s->begin = (uint)min(tile + l, (ulong)n);
+        s->end = (uint)min(tile + (ulong)g * L->chunk, (ulong)n);
+        s->step = g;
+    } else {
+        ulong b = (ulong)id * L->chunk;
+        s->begin = (uint)min(b, (ulong)n);
+        s->end = (uint)min(b + L->chunk, (ulong)n);
+        s->step = 1u;
+    }
     s->pass = L->first_pass;
     for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
         s->cnt[k] = 0;
@@ -189,7 +215,7 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
                 atomic_add(&vars[L->counter_var + c], s->ctr[c]);
         if (L->prof_var != SLUICE_NONE) {
             if (s->end > s->begin)
-                atomic_add(&vars[L->prof_var], s->end - s->begin);
+                atomic_add(&vars[L->prof_var], (s->end - s->begin + s->step - 1u) / s->step);
             for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
                 if (s->cnt[k])
                     atomic_add(&vars[L->prof_var + 1 + k], s->cnt[k]);
@@ -203,15 +229,18 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
 #define SLUICE_PARAMS                                                                              \
     global uint *sluice_vars_, global uint *sluice_scratch_, const sluice_launch_ sluice_L_
 
-/* Loops over this work-item's records, with the record index in `id`. The
- * statement (usually a block) that follows is the body. Code before it runs
- * once per work-item; code after it must not emit or count. */
+/* Loops over this work-item's records, with the record index in `id`, in
+ * increasing order. The statement (usually a block) that follows is the
+ * body. Code before it runs once per work-item; code after it must not emit
+ * or count. The records need not be contiguous (on GPUs they are
+ * interleaved; see sluice_begin_): a body that needs a contiguous range uses
+ * SLUICE_FOR_EACH_RANGE. */
 #define SLUICE_FOR_EACH(id)                                                                        \
     sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_);                          \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_, 0);                       \
     for (; sluice_s_.pass < 2u;                                                                    \
          sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
-        for (uint id = sluice_s_.begin; id < sluice_s_.end; ++id)
+        for (uint id = sluice_s_.begin; id < sluice_s_.end; id += sluice_s_.step)
 
 /* The range form of SLUICE_FOR_EACH, for bodies that handle records in
  * blocks (vector loads, SLUICE_EMIT16): the body runs once per pass with this
@@ -221,7 +250,7 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
  * it too, e.g. for a tail of fewer than 16 records. */
 #define SLUICE_FOR_EACH_RANGE(b, e)                                                                \
     sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_);                          \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_, 1);                       \
     for (; sluice_s_.pass < 2u;                                                                    \
          sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
         for (uint b = sluice_s_.begin, e = sluice_s_.end, sluice_once_ = 1u; sluice_once_;         \

@@ -990,16 +990,23 @@ static void test_fill(sluice_context *ctx)
 /* SLUICE_CHUNK fixes the records per work-item: a number that is not one is
  * refused with a message naming the variable; an odd chunk (7 records)
  * splits as the default does, ordered and unordered. */
-static void test_chunk_env(void)
+/* A context is refused while environment variable `var` holds `value`,
+ * with a message that names the variable. */
+static void check_env_refused(const char *var, const char *value)
 {
     sluice_context *c = NULL;
     char msg[256] = "";
-    setenv("SLUICE_CHUNK", "12x", 1);
+    setenv(var, value, 1);
     CHECK(sluice_context_create(NULL, &c, msg, sizeof msg) == SLUICE_ERROR_INVALID_ARGUMENT && !c,
-          "SLUICE_CHUNK=12x refused");
-    CHECK(strstr(msg, "SLUICE_CHUNK") != NULL, "the message names the variable: %s", msg);
+          "%s=%s refused", var, value);
+    CHECK(strstr(msg, var) != NULL, "the message names the variable: %s", msg);
+}
+
+static void test_chunk_env(void)
+{
+    check_env_refused("SLUICE_CHUNK", "12x");
     setenv("SLUICE_CHUNK", "7", 1);
-    c = check_context(0);
+    sluice_context *c = check_context(0);
     sluice_program *p = program(c);
     for (int m = 0; m < 2; ++m) {
         test_split(c, p, 1025, 0, m ? SLUICE_UNORDERED : SLUICE_ORDERED);
@@ -1008,6 +1015,45 @@ static void test_chunk_env(void)
     sluice_program_destroy(p);
     sluice_context_destroy(c);
     unsetenv("SLUICE_CHUNK");
+}
+
+/* SLUICE_LAYOUT and the layout option: a bad value is refused with a
+ * message that names it; the GPU layout (interleaved records, a work-group
+ * scanning the chunk counts) gives the same outputs on this device, for
+ * sizes around its 256-record tiles and with one chunk per work-group or
+ * many. */
+static void test_layout(void)
+{
+    check_env_refused("SLUICE_LAYOUT", "gpu");
+    unsetenv("SLUICE_LAYOUT");
+    sluice_context *c = NULL;
+    char msg[256] = "";
+    sluice_context_options o;
+    memset(&o, 0, sizeof o);
+    o.layout = (sluice_layout)7;
+    msg[0] = '\0';
+    CHECK(sluice_context_create(&o, &c, msg, sizeof msg) == SLUICE_ERROR_INVALID_ARGUMENT && !c,
+          "layout 7 refused: %s", msg);
+    o.layout = SLUICE_LAYOUT_INTERLEAVED;
+    const unsigned chunks[] = {0, 1, 5};
+    for (size_t ci = 0; ci < sizeof chunks / sizeof *chunks; ++ci) {
+        o.chunk = chunks[ci];
+        c = NULL;
+        CHECK(sluice_context_create(&o, &c, msg, sizeof msg) == SLUICE_OK && c,
+              "interleaved context: %s", msg);
+        if (!c)
+            return;
+        sluice_program *p = program(c);
+        const size_t sizes[] = {0, 1, 255, 256, 257, 4099, 65537};
+        for (size_t i = 0; i < sizeof sizes / sizeof *sizes; ++i)
+            for (int m = 0; m < 2; ++m)
+                test_split(c, p, sizes[i], (int)(i % 4), m ? SLUICE_UNORDERED : SLUICE_ORDERED);
+        test_multi_emit(c, p, SLUICE_ORDERED);
+        test_multi_emit(c, p, SLUICE_UNORDERED);
+        test_mapped_lengths(c, p);
+        sluice_program_destroy(p);
+        sluice_context_destroy(c);
+    }
 }
 
 int main(void)
@@ -1034,5 +1080,6 @@ int main(void)
     sluice_context_destroy(ctx);
     test_profile();
     test_chunk_env();
+    test_layout();
     return check_summary();
 }

@@ -174,6 +174,21 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
         }
         opt.chunk = (unsigned)c;
     }
+    const char *layout_env = getenv("SLUICE_LAYOUT");
+    if (opt.layout == SLUICE_LAYOUT_AUTO && layout_env && *layout_env) {
+        if (strcmp(layout_env, "contiguous") == 0)
+            opt.layout = SLUICE_LAYOUT_CONTIGUOUS;
+        else if (strcmp(layout_env, "interleaved") == 0)
+            opt.layout = SLUICE_LAYOUT_INTERLEAVED;
+        else if (strcmp(layout_env, "auto") != 0) {
+            set_msg(error, error_size, "SLUICE_LAYOUT must be auto, contiguous or interleaved");
+            return SLUICE_ERROR_INVALID_ARGUMENT;
+        }
+    }
+    if ((unsigned)opt.layout > (unsigned)SLUICE_LAYOUT_INTERLEAVED) {
+        set_msg(error, error_size, "sluice_context_create: bad layout");
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    }
 
     pick_state ps = {opt.device, 1, NULL, NULL, 0};
     sluice_status st = for_each_device(pick_visit, &ps);
@@ -207,6 +222,16 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     ctx->no_simd = opt.no_simd;
     ctx->verbose = opt.verbose;
     ctx->chunk = opt.chunk;
+    ctx->layout = opt.layout != SLUICE_LAYOUT_AUTO ? (int)opt.layout
+                  : ctx->info.is_cpu               ? SLUICE_LAYOUT_CONTIGUOUS
+                                                   : SLUICE_LAYOUT_INTERLEAVED;
+    /* GPUs run work-items in lockstep groups of 32 or 64: a work-group of 8
+     * would leave most lanes idle */
+    ctx->group = 8;
+    if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED) {
+        size_t most = ctx->info.max_work_group_size;
+        ctx->group = most >= 256 ? 256 : most >= 1 ? most : 1;
+    }
     cl_int err;
     cl_context_properties props[] = {CL_CONTEXT_PLATFORM, (cl_context_properties)ps.p, 0};
     ctx->cl = clCreateContext(props, 1, &ps.d, NULL, NULL, &err);

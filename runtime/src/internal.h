@@ -36,7 +36,7 @@ const char *sl_embedded_find(const char *name);
 /* Host mirror of sluice_launch_ in kernels/sluice.cl: same order, all cl_uint. */
 typedef struct sl_launch {
     cl_uint n_fixed, in_var, chunk, mode, first_pass, ordered_mask, out_mask;
-    cl_uint counter_var, n_counters, prof_var, stride, in_cap, n_map;
+    cl_uint counter_var, n_counters, prof_var, stride, in_cap, n_map, interleave;
     cl_uint out_var[SLUICE_MAX_OUTPUTS];
     cl_uint out_cap[SLUICE_MAX_OUTPUTS];
     cl_uint map_var[SLUICE_MAX_OUTPUTS];
@@ -73,6 +73,10 @@ struct sluice_context {
     sluice_device_info info;
     char error[4096];
     unsigned chunk;
+    /* How stream launches share out records (sluice_layout, resolved: never
+     * SLUICE_LAYOUT_AUTO) and the work-group size they use. */
+    int layout;
+    size_t group;
     /* Variable pool. */
     cl_mem vars;
     unsigned char *var_used;

@@ -7,8 +7,6 @@
 
 /* Hidden parameters before the user's: variable pool, scratch, launch info. */
 #define SL_HIDDEN_ARGS 3u
-/* Work-items per work-group of a stream launch. */
-#define SL_LOCAL_SIZE 8u
 
 sluice_status sluice_kernel_create(sluice_program *program, const char *name, sluice_kernel **out)
 {
@@ -225,7 +223,7 @@ static size_t choose_chunk(const sluice_context *ctx, size_t bound)
     if (ctx->chunk)
         return ctx->chunk;
     size_t lo = 16, hi = 16384, want = bound / 1024;
-    if (!ctx->info.is_cpu) {
+    if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED) {
         lo = 1;
         hi = 64;
         want = bound / 65536;
@@ -237,7 +235,7 @@ static size_t choose_chunk(const sluice_context *ctx, size_t bound)
  * first command (an ordered launch is two). */
 static sluice_status enqueue(sluice_kernel *k, size_t global, int first)
 {
-    size_t local = SL_LOCAL_SIZE;
+    size_t local = k->ctx->group;
     cl_event ev = NULL;
     cl_int err = clEnqueueNDRangeKernel(k->ctx->queue, k->cl, 1, NULL, &global, &local, 0, NULL,
                                         k->ctx->profile ? &ev : NULL);
@@ -352,7 +350,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 
     size_t chunk = choose_chunk(ctx, bound);
     size_t chunks = (bound + chunk - 1) / chunk;
-    size_t global = sl_round_up(chunks ? chunks : 1, SL_LOCAL_SIZE);
+    size_t global = sl_round_up(chunks ? chunks : 1, ctx->group);
     L.chunk = (cl_uint)chunk;
     L.stride = (cl_uint)(global + 1);
     L.counter_var = k->counters ? k->counters->var : SL_NONE;
@@ -407,19 +405,25 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
                 if (!((L.ordered_mask >> s) & 1u))
                     continue;
                 cl_uint n = (cl_uint)global, var = L.out_var[s], offset = s * L.stride;
+                /* one work-item on a CPU (a few thousand counts); on a GPU,
+                 * whose single work-item is slow and whose launches have
+                 * many more chunks, one work-group */
+                size_t scan_group = ctx->layout == SLUICE_LAYOUT_INTERLEAVED ? ctx->group : 1;
                 clSetKernelArg(ctx->scan_kernel, 0, sizeof(cl_mem), &ctx->vars);
                 clSetKernelArg(ctx->scan_kernel, 1, sizeof(cl_mem), &ctx->scratch);
                 clSetKernelArg(ctx->scan_kernel, 2, sizeof offset, &offset);
                 clSetKernelArg(ctx->scan_kernel, 3, sizeof var, &var);
                 clSetKernelArg(ctx->scan_kernel, 4, sizeof n, &n);
-                st = sl_enqueue_raw(ctx, ctx->scan_kernel, "sluice_scan_chunk_counts", 1, 1,
-                                    SL_RAW_IO(n, 8)); /* each count read and written */
+                clSetKernelArg(ctx->scan_kernel, 5, (scan_group + 1) * sizeof(cl_uint), NULL);
+                st = sl_enqueue_raw(ctx, ctx->scan_kernel, "sluice_scan_chunk_counts", scan_group,
+                                    scan_group, SL_RAW_IO(n, 8)); /* each count read, written */
             }
             L.mode = 2;
             L.first_pass = any_unordered ? 0 : 1;
         } else {
             L.mode = 0;
             L.first_pass = L.out_mask ? 0 : 1;
+            L.interleave = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
         }
         if (st == SLUICE_OK)
             st = set_hidden(k, &L);

@@ -103,6 +103,22 @@ typedef struct sluice_device_info {
  */
 sluice_status sluice_devices_list(sluice_device_info *out, size_t max, size_t *count);
 
+/** How the work-items of a stream launch share out its records. */
+typedef enum sluice_layout {
+    /** By device type: contiguous on CPUs, interleaved elsewhere. */
+    SLUICE_LAYOUT_AUTO = 0,
+    /** Each work-item takes a contiguous chunk of records (work-groups of 8):
+     *  on a CPU one work-item then runs like a C loop over its chunk. */
+    SLUICE_LAYOUT_CONTIGUOUS = 1,
+    /** Work-groups of up to 256 work-items take contiguous tiles, and within
+     *  a tile work-item l takes records l, l + G, l + 2G, ... (G the group
+     *  size), so neighbouring work-items read neighbouring records, as a GPU
+     *  wants (coalesced loads). Ordered outputs and SLUICE_FOR_EACH_RANGE
+     *  keep contiguous chunks per work-item. The chunk counts of ordered
+     *  outputs are scanned by a work-group instead of one work-item. */
+    SLUICE_LAYOUT_INTERLEAVED = 2
+} sluice_layout;
+
 /** Options for sluice_context_create(); zero-initialise, then set fields. */
 typedef struct sluice_context_options {
     /** Case-insensitive substring of "platform name / device name" that picks
@@ -125,6 +141,10 @@ typedef struct sluice_context_options {
      *  that succeeds prints nothing: its warnings stay in
      *  sluice_program_build_log(). Also enabled by SLUICE_VERBOSE=1. */
     int verbose;
+    /** How launches share out records (sluice_layout; 0 is AUTO). Also set
+     *  by SLUICE_LAYOUT=contiguous or SLUICE_LAYOUT=interleaved, e.g. to
+     *  test the GPU layout on a CPU. */
+    sluice_layout layout;
 } sluice_context_options;
 
 typedef struct sluice_context sluice_context;
