@@ -2,11 +2,14 @@
  * Prefix sums (streams/scan.c): reduce-then-scan over contiguous chunks.
  *
  *   pass 1  scan_sums_T   one work-item per chunk sums its records
- *   pass 2  scan_chunks_T one work-item scans the chunk sums in place
- *                         (exclusive), stores the total after them and sets
- *                         the output stream's length
+ *   pass 2  scan_chunks_T one work-item (a work-group on GPUs) scans the
+ *                         chunk sums in place (exclusive), stores the total
+ *                         after them and sets the output stream's length
  *   pass 3  scan_apply_T  one work-item per chunk scans its records serially,
  *                         starting from the chunk's offset
+ *
+ * On GPUs (the runtime's interleaved layout) passes 1 and 3 run one
+ * work-group per chunk instead (SCAN_GROUP_KERNELS below).
  *
  * On a CPU a work-item walking a contiguous chunk runs like a C loop. Both
  * record passes go 16 records per step (sluice.cl's SLUICE_REDUCE16_ and
@@ -70,20 +73,19 @@ inline void scan_range_(uint n, uint chunk, uint *begin, uint *end)
         sums[get_global_id(0)] = s;                                                                \
     }                                                                                              \
                                                                                                    \
-    /* One work-item: sums[0..m) becomes its exclusive scan, sums[m] the total,                    \
-     * sums[m + 1] is non-zero when the input overflowed. */                                       \
+    /* sums[0..m) becomes its exclusive scan, sums[m] the total, sums[m + 1]                       \
+     * is non-zero when the input overflowed. One work-group                                       \
+     * (SLUICE_GROUP_SCAN_; `part`: one T per work-item and one more): the host                    \
+     * launches one work-item on a CPU, a group on a GPU. */                                       \
     __kernel void scan_chunks_##SUFFIX(global uint *vars, uint in_var, uint n_fixed, uint limit,   \
-                                       uint out_var, global T *sums, uint m)                       \
+                                       uint out_var, global T *sums, uint m, local T *part)        \
     {                                                                                              \
-        if (get_global_id(0) != 0)                                                                 \
+        if (get_group_id(0) != 0)                                                                  \
             return;                                                                                \
-        T s = (T)(0);                                                                              \
-        for (uint i = 0; i < m; ++i) {                                                             \
-            T c = sums[i];                                                                         \
-            sums[i] = s;                                                                           \
-            s += c;                                                                                \
-        }                                                                                          \
-        sums[m] = s;                                                                               \
+        SLUICE_GROUP_SCAN_(T, sums, m, (T)(0), part);                                              \
+        if (get_local_id(0) != 0)                                                                  \
+            return;                                                                                \
+        sums[m] = part[get_local_size(0)];                                                         \
         int overflowed = n_fixed == SCAN_NONE && vars[in_var] > limit;                             \
         sums[m + 1u] = (T)(overflowed);                                                            \
         if (overflowed)                                                                            \
@@ -125,3 +127,66 @@ inline void scan_range_(uint n, uint chunk, uint *begin, uint *end)
 
 SCAN_KERNELS(uint, uint16, u32)
 SCAN_KERNELS(float, float16, f32)
+
+/* Passes 1 and 3 for GPUs (the runtime's interleaved layout): one work-group
+ * per chunk, whose work-items read neighbouring records together (coalesced)
+ * instead of one work-item walking the chunk. Pass 1 sums the chunk in a
+ * tree in local memory; pass 3 scans it G records (the group size, a power
+ * of two) at a time, each round a Hillis-Steele scan in local memory added
+ * to the carry of the rounds before. `part` holds one T per work-item. */
+inline void scan_group_range_(uint n, uint chunk, uint *begin, uint *end)
+{
+    ulong b = (ulong)get_group_id(0) * chunk;
+    *begin = (uint)min(b, (ulong)n);
+    *end = (uint)min(b + chunk, (ulong)n);
+}
+
+#define SCAN_GROUP_KERNELS(T, SUFFIX)                                                              \
+    __kernel void scan_sums_wg_##SUFFIX(global const uint *vars, uint in_var, uint n_fixed,        \
+                                        uint limit, uint chunk, global const T *in,                \
+                                        global T *sums, local T *part)                             \
+    {                                                                                              \
+        uint l = (uint)get_local_id(0), g = (uint)get_local_size(0), begin, end;                   \
+        scan_group_range_(scan_length_(vars, in_var, n_fixed, limit), chunk, &begin, &end);        \
+        T s = (T)(0);                                                                              \
+        for (uint i = begin + l; i < end; i += g)                                                  \
+            s += in[i];                                                                            \
+        part[l] = s;                                                                               \
+        barrier(CLK_LOCAL_MEM_FENCE);                                                              \
+        for (uint h = g / 2u; h > 0u; h /= 2u) {                                                   \
+            if (l < h)                                                                             \
+                part[l] += part[l + h];                                                            \
+            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
+        }                                                                                          \
+        if (l == 0u)                                                                               \
+            sums[get_group_id(0)] = part[0];                                                       \
+    }                                                                                              \
+                                                                                                   \
+    __kernel void scan_apply_wg_##SUFFIX(                                                          \
+        global const uint *vars, uint in_var, uint n_fixed, uint limit, uint chunk,                \
+        global const T *in, global T *out, global const T *sums, uint inclusive, local T *part)    \
+    {                                                                                              \
+        uint l = (uint)get_local_id(0), g = (uint)get_local_size(0), begin, end;                   \
+        scan_group_range_(scan_length_(vars, in_var, n_fixed, limit), chunk, &begin, &end);        \
+        T carry = sums[get_group_id(0)];                                                           \
+        for (uint base = begin; base < end; base += g) {                                           \
+            uint i = base + l;                                                                     \
+            part[l] = i < end ? in[i] : (T)(0);                                                    \
+            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
+            for (uint off = 1u; off < g; off *= 2u) {                                              \
+                T y = l >= off ? part[l - off] : (T)(0);                                           \
+                barrier(CLK_LOCAL_MEM_FENCE);                                                      \
+                part[l] += y;                                                                      \
+                barrier(CLK_LOCAL_MEM_FENCE);                                                      \
+            }                                                                                      \
+            /* exclusive from the lane before (p - x is not exact for floats) */                   \
+            T p = inclusive ? part[l] : (l ? part[l - 1u] : (T)(0)), total = part[g - 1u];         \
+            if (i < end)                                                                           \
+                out[i] = carry + p;                                                                \
+            carry += total;                                                                        \
+            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
+        }                                                                                          \
+    }
+
+SCAN_GROUP_KERNELS(uint, u32)
+SCAN_GROUP_KERNELS(float, f32)

@@ -460,6 +460,39 @@ typedef float16 sluice_float16_unaligned_ __attribute__((aligned(4)));
         (result) = r_;                                                                             \
     } while (0)
 
+/* Exclusive scan, in place, of a[0..m) (a global T array) by one work-group,
+ * starting at `start` (evaluated by work-item 0 only); `part` is local
+ * memory for g + 1 T (g the group size), and part[g] receives the end
+ * (start plus the sum). Each work-item sums a contiguous share, work-item 0
+ * scans the shares' sums, and each work-item scans its share from there.
+ * Every work-item of the group must reach it (it has barriers). */
+#define SLUICE_GROUP_SCAN_(T, a, m, start, part)                                                   \
+    do {                                                                                           \
+        uint l_ = (uint)get_local_id(0), g_ = (uint)get_local_size(0);                             \
+        uint sh_ = ((m) + g_ - 1u) / g_, b_ = min(l_ * sh_, (m)), e_ = min(b_ + sh_, (m));         \
+        T s_ = (T)(0);                                                                             \
+        for (uint i_ = b_; i_ < e_; ++i_)                                                          \
+            s_ += (a)[i_];                                                                         \
+        (part)[l_] = s_;                                                                           \
+        barrier(CLK_LOCAL_MEM_FENCE);                                                              \
+        if (l_ == 0u) {                                                                            \
+            T acc_ = (start);                                                                      \
+            for (uint k_ = 0; k_ < g_; ++k_) {                                                     \
+                T c_ = (part)[k_];                                                                 \
+                (part)[k_] = acc_;                                                                 \
+                acc_ += c_;                                                                        \
+            }                                                                                      \
+            (part)[g_] = acc_;                                                                     \
+        }                                                                                          \
+        barrier(CLK_LOCAL_MEM_FENCE);                                                              \
+        s_ = (part)[l_];                                                                           \
+        for (uint i_ = b_; i_ < e_; ++i_) {                                                        \
+            T c_ = (a)[i_];                                                                        \
+            (a)[i_] = s_;                                                                          \
+            s_ += c_;                                                                              \
+        }                                                                                          \
+    } while (0)
+
 /* The mask of the non-zero lanes of `c` (an int16; bit k for lane k), e.g. of
  * a vector comparison such as `x < (float16)t`. */
 #define sluice_mask16(c) sluice_mask16_((private int16[1]){(c)})

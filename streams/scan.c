@@ -1,7 +1,9 @@
 /* Prefix sums of scalar streams: reduce-then-scan over contiguous chunks
  * (kernels/scan.cl). Each work-item owns one chunk of records and walks it in
  * a plain loop, which is what runs fast on a CPU device; the chunk sums are
- * scanned by a single work-item in between. */
+ * scanned by a single work-item in between. With the GPU layout
+ * (SLUICE_LAYOUT_INTERLEAVED) a work-group owns each chunk and its
+ * work-items read neighbouring records, and a work-group scans the sums. */
 #include "common.h"
 #include "sluice/streams.h"
 
@@ -30,10 +32,14 @@ typedef struct scan_input {
     cl_uint limit; /* capacity: clamps a device-side length */
     size_t bound;  /* most records the input may have */
     size_t chunk, global;
+    /* the GPU layout: one work-group of `group` work-items per chunk, and
+     * `chunks` chunk sums (else group 1, chunks = global) */
+    size_t group, chunks;
 } scan_input;
 
 static void scan_input_init(sluice_stream *in, scan_input *si)
 {
+    sluice_context *ctx = in->ctx;
     si->in_var = in->var;
     si->limit = (cl_uint)in->capacity;
     if (in->len_known) {
@@ -45,7 +51,15 @@ static void scan_input_init(sluice_stream *in, scan_input *si)
     }
     si->chunk = scan_chunk(si->bound);
     size_t chunks = (si->bound + si->chunk - 1) / si->chunk;
-    si->global = sl_round_up(chunks ? chunks : 1, SCAN_LOCAL);
+    if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED) {
+        si->group = ctx->group;
+        si->chunks = chunks ? chunks : 1;
+        si->global = si->chunks * si->group;
+    } else {
+        si->group = 1;
+        si->global = sl_round_up(chunks ? chunks : 1, SCAN_LOCAL);
+        si->chunks = si->global;
+    }
 }
 
 sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream *out,
@@ -105,17 +119,23 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
     cl_kernel k[3] = {NULL, NULL, NULL};
     cl_mem sums = NULL;
     sluice_status st = SLUICE_OK;
-    for (int i = 0; i < 3 && st == SLUICE_OK; ++i)
-        st = sl_embedded_cl_kernel(ctx, "scan.cl", names[i], &k[i]);
+    for (int i = 0; i < 3 && st == SLUICE_OK; ++i) {
+        /* the GPU layout's passes 1 and 3 (profiled under the same names) */
+        char kname[40];
+        snprintf(kname, sizeof kname, "%.*s%s%s", (int)(strlen(names[i]) - 3), names[i],
+                 si.group > 1 && i != 1 ? "wg_" : "", sfx);
+        st = sl_embedded_cl_kernel(ctx, "scan.cl", kname, &k[i]);
+    }
     cl_int err = CL_SUCCESS;
     if (st == SLUICE_OK) {
         /* The chunk sums, the total and the overflow flag (scan.cl). */
-        sums = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, (si.global + 2) * 4, NULL, &err);
+        sums = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, (si.chunks + 2) * 4, NULL, &err);
         if (!sums)
             st = sl_cl_fail(ctx, err, "sluice_scan: allocating chunk sums");
     }
     if (st == SLUICE_OK) {
-        cl_uint chunk = (cl_uint)si.chunk, m = (cl_uint)si.global, incl = inclusive ? 1u : 0u;
+        cl_uint chunk = (cl_uint)si.chunk, m = (cl_uint)si.chunks, incl = inclusive ? 1u : 0u;
+        size_t part = (si.group + 1) * 4; /* local memory of each pass */
         cl_uint out_var = out->var;
         /* Pass 1. */
         sl_set_arg(k[0], 0, sizeof(cl_mem), &ctx->vars, &err);
@@ -125,6 +145,8 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
         sl_set_arg(k[0], 4, sizeof(cl_uint), &chunk, &err);
         sl_set_arg(k[0], 5, sizeof(cl_mem), &in->mem, &err);
         sl_set_arg(k[0], 6, sizeof(cl_mem), &sums, &err);
+        if (si.group > 1)
+            sl_set_arg(k[0], 7, part, NULL, &err);
         /* Pass 2. */
         sl_set_arg(k[1], 0, sizeof(cl_mem), &ctx->vars, &err);
         sl_set_arg(k[1], 1, sizeof(cl_uint), &si.in_var, &err);
@@ -133,6 +155,7 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
         sl_set_arg(k[1], 4, sizeof(cl_uint), &out_var, &err);
         sl_set_arg(k[1], 5, sizeof(cl_mem), &sums, &err);
         sl_set_arg(k[1], 6, sizeof(cl_uint), &m, &err);
+        sl_set_arg(k[1], 7, part, NULL, &err);
         /* Pass 3. */
         sl_set_arg(k[2], 0, sizeof(cl_mem), &ctx->vars, &err);
         sl_set_arg(k[2], 1, sizeof(cl_uint), &si.in_var, &err);
@@ -143,6 +166,8 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
         sl_set_arg(k[2], 6, sizeof(cl_mem), &out->mem, &err);
         sl_set_arg(k[2], 7, sizeof(cl_mem), &sums, &err);
         sl_set_arg(k[2], 8, sizeof(cl_uint), &incl, &err);
+        if (si.group > 1)
+            sl_set_arg(k[2], 9, part, NULL, &err);
         if (err != CL_SUCCESS)
             st = sl_cl_fail(ctx, err, "sluice_scan: setting kernel arguments");
     }
@@ -151,18 +176,20 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
     const sl_raw_io io_sums = {si.n_fixed, si.in_var, si.limit, 4};
     const sl_raw_io io_apply = {si.n_fixed, si.in_var, si.limit, 8};
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k[0], names[0], si.global, SCAN_LOCAL, &io_sums);
+        st = sl_enqueue_raw(ctx, k[0], names[0], si.global, si.group > 1 ? si.group : SCAN_LOCAL,
+                            &io_sums);
     if (st == SLUICE_OK) {
-        st = sl_enqueue_raw(ctx, k[1], names[1], 1, 1, SL_RAW_IO(si.global, 8));
+        st = sl_enqueue_raw(ctx, k[1], names[1], si.group, si.group, SL_RAW_IO(si.chunks, 8));
         /* Pass 2 writes the output's length on the device. */
         out->len_known = si.n_fixed != SL_NONE;
         out->len = si.n_fixed != SL_NONE ? si.n_fixed : 0;
         sl_stream_written(out, SL_WRITER_ALGORITHM, 0, "sluice_scan");
     }
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, k[2], names[2], si.global, SCAN_LOCAL, &io_apply);
+        st = sl_enqueue_raw(ctx, k[2], names[2], si.global, si.group > 1 ? si.group : SCAN_LOCAL,
+                            &io_apply);
     if (st == SLUICE_OK && total)
-        st = sl_read_flagged(ctx, sums, si.global, total, in, "sluice_scan", "total");
+        st = sl_read_flagged(ctx, sums, si.chunks, total, in, "sluice_scan", "total");
     if (sums)
         clReleaseMemObject(sums);
     for (int i = 0; i < 3; ++i)

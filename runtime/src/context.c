@@ -228,10 +228,9 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     /* GPUs run work-items in lockstep groups of 32 or 64: a work-group of 8
      * would leave most lanes idle */
     ctx->group = 8;
-    if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED) {
-        size_t most = ctx->info.max_work_group_size;
-        ctx->group = most >= 256 ? 256 : most >= 1 ? most : 1;
-    }
+    if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED) /* a power of two (the scans' trees) */
+        for (ctx->group = 256; ctx->group > 1 && ctx->group > ctx->info.max_work_group_size;)
+            ctx->group /= 2;
     cl_int err;
     cl_context_properties props[] = {CL_CONTEXT_PLATFORM, (cl_context_properties)ps.p, 0};
     ctx->cl = clCreateContext(props, 1, &ps.d, NULL, NULL, &err);
