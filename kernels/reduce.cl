@@ -3,7 +3,12 @@
  *
  *   pass 1  reduce_part_OP_T   one work-item per chunk reduces its records,
  *                              16 at a time (SLUICE_REDUCE16_), into parts[id]
- *   pass 2  reduce_final_OP_T  one work-item reduces parts[0..m) into parts[m]
+ *   pass 2  reduce_final_OP_T  one work-item (a work-group on GPUs) reduces
+ *                              parts[0..m) into parts[m]
+ *
+ * On GPUs (the runtime's interleaved layout) pass 1 runs one work-group per
+ * chunk instead (reduce_part_wg_OP_T), its work-items reading neighbouring
+ * records.
  *
  * Empty chunks give the identity, so an empty stream reduces to it. Float MIN
  * and MAX follow fmin/fmax (SLUICE_FMIN_): a NaN is ignored unless every
@@ -37,14 +42,30 @@ inline uint reduce_length_(global const uint *vars, uint in_var, uint n_fixed, u
             parts[get_global_size(0) + 1u] = (T)(n_fixed == REDUCE_NONE && vars[in_var] > limit);  \
     }                                                                                              \
                                                                                                    \
-    __kernel void reduce_final_##NAME(global T *parts, uint m)                                     \
+    /* The GPU layout's pass 1: one work-group per chunk (SLUICE_GROUP_REDUCE_). */                \
+    __kernel void reduce_part_wg_##NAME(global const uint *vars, uint in_var, uint n_fixed,        \
+                                        uint limit, uint chunk, global const T *in,                \
+                                        global T *parts, local T *part)                            \
     {                                                                                              \
-        if (get_global_id(0) != 0)                                                                 \
+        uint n = reduce_length_(vars, in_var, n_fixed, limit);                                     \
+        ulong b = (ulong)get_group_id(0) * chunk;                                                  \
+        uint begin = (uint)min(b, (ulong)n), end = (uint)min(b + chunk, (ulong)n);                 \
+        SLUICE_GROUP_REDUCE_(T, in, begin, end, IDENTITY, OP, part);                               \
+        if (get_local_id(0) != 0)                                                                  \
             return;                                                                                \
-        T r = (T)(IDENTITY);                                                                       \
-        for (uint i = 0; i < m; ++i)                                                               \
-            r = OP(r, parts[i]);                                                                   \
-        parts[m] = r;                                                                              \
+        parts[get_group_id(0)] = part[0];                                                          \
+        if (get_group_id(0) == 0)                                                                  \
+            parts[get_num_groups(0) + 1u] = (T)(n_fixed == REDUCE_NONE && vars[in_var] > limit);   \
+    }                                                                                              \
+                                                                                                   \
+    /* One work-group (one work-item on a CPU, a group on a GPU). */                               \
+    __kernel void reduce_final_##NAME(global T *parts, uint m, local T *part)                      \
+    {                                                                                              \
+        if (get_group_id(0) != 0)                                                                  \
+            return;                                                                                \
+        SLUICE_GROUP_REDUCE_(T, parts, 0u, m, IDENTITY, OP, part);                                 \
+        if (get_local_id(0) == 0)                                                                  \
+            parts[m] = part[0];                                                                    \
     }
 
 REDUCE_KERNELS(uint, uint16, sum_u32, 0u, SLUICE_ADD_)

@@ -146,19 +146,10 @@ inline void scan_group_range_(uint n, uint chunk, uint *begin, uint *end)
                                         uint limit, uint chunk, global const T *in,                \
                                         global T *sums, local T *part)                             \
     {                                                                                              \
-        uint l = (uint)get_local_id(0), g = (uint)get_local_size(0), begin, end;                   \
+        uint begin, end;                                                                           \
         scan_group_range_(scan_length_(vars, in_var, n_fixed, limit), chunk, &begin, &end);        \
-        T s = (T)(0);                                                                              \
-        for (uint i = begin + l; i < end; i += g)                                                  \
-            s += in[i];                                                                            \
-        part[l] = s;                                                                               \
-        barrier(CLK_LOCAL_MEM_FENCE);                                                              \
-        for (uint h = g / 2u; h > 0u; h /= 2u) {                                                   \
-            if (l < h)                                                                             \
-                part[l] += part[l + h];                                                            \
-            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
-        }                                                                                          \
-        if (l == 0u)                                                                               \
+        SLUICE_GROUP_REDUCE_(T, in, begin, end, 0, SLUICE_ADD_, part);                             \
+        if (get_local_id(0) == 0)                                                                  \
             sums[get_group_id(0)] = part[0];                                                       \
     }                                                                                              \
                                                                                                    \

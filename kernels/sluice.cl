@@ -460,6 +460,31 @@ typedef float16 sluice_float16_unaligned_ __attribute__((aligned(4)));
         (result) = r_;                                                                             \
     } while (0)
 
+/* Reduces in[begin..end) (a global T array) with OP (SLUICE_ADD_ ...) by one
+ * work-group: work-item l reads in[begin + l], in[begin + l + g], ... (g the
+ * group size, a power of two), so neighbouring work-items read neighbouring
+ * records, then the group combines its g values in a tree in `part` (local
+ * memory for g T). The result is in part[0]. Every work-item of the group
+ * must reach it (it has barriers). */
+#define SLUICE_GROUP_REDUCE_(T, in, begin, end, identity, OP, part)                                \
+    do {                                                                                           \
+        uint l_ = (uint)get_local_id(0), g_ = (uint)get_local_size(0);                             \
+        T r_ = (T)(identity);                                                                      \
+        for (uint i_ = (begin) + l_; i_ < (end); i_ += g_) {                                       \
+            T x_ = (in)[i_];                                                                       \
+            r_ = OP(r_, x_);                                                                       \
+        }                                                                                          \
+        (part)[l_] = r_;                                                                           \
+        barrier(CLK_LOCAL_MEM_FENCE);                                                              \
+        for (uint h_ = g_ / 2u; h_ > 0u; h_ /= 2u) {                                               \
+            if (l_ < h_) {                                                                         \
+                T a_ = (part)[l_], b_ = (part)[l_ + h_];                                           \
+                (part)[l_] = OP(a_, b_);                                                           \
+            }                                                                                      \
+            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
+        }                                                                                          \
+    } while (0)
+
 /* Exclusive scan, in place, of a[0..m) (a global T array) by one work-group,
  * starting at `start` (evaluated by work-item 0 only); `part` is local
  * memory for g + 1 T (g the group size), and part[g] receives the end

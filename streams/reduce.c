@@ -1,6 +1,8 @@
 /* Reductions of scalar streams (kernels/reduce.cl): one work-item per
  * contiguous chunk reduces its records in a plain loop, then one work-item
- * reduces the per-chunk results; the host reads the single value back. */
+ * reduces the per-chunk results; the host reads the single value back. With
+ * the GPU layout (SLUICE_LAYOUT_INTERLEAVED) a work-group takes each chunk
+ * and the per-chunk results, its work-items reading neighbouring records. */
 #include "common.h"
 #include "sluice/streams.h"
 
@@ -75,7 +77,11 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
         return SLUICE_OK;
     }
     size_t chunk = reduce_chunk(bound);
-    size_t global = sl_round_up((bound + chunk - 1) / chunk, REDUCE_LOCAL);
+    size_t chunks = (bound + chunk - 1) / chunk;
+    /* the GPU layout: a work-group per chunk and for pass 2 */
+    size_t group = ctx->layout == SLUICE_LAYOUT_INTERLEAVED ? ctx->group : 1;
+    size_t m_parts = group > 1 ? chunks : sl_round_up(chunks, REDUCE_LOCAL);
+    size_t global = group > 1 ? chunks * group : m_parts;
 
     static const char *const ops[] = {"sum", "min", "max"};
     char part_name[32], final_name[32];
@@ -86,17 +92,20 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
     cl_kernel part = NULL, final = NULL;
     cl_mem parts = NULL;
     cl_int err = CL_SUCCESS;
-    st = sl_embedded_cl_kernel(ctx, "reduce.cl", part_name, &part);
+    char part_kernel[40]; /* profiled as part_name either way */
+    snprintf(part_kernel, sizeof part_kernel, "reduce_part_%s%s_%s", group > 1 ? "wg_" : "",
+             ops[op], type == SLUICE_U32 ? "u32" : "f32");
+    st = sl_embedded_cl_kernel(ctx, "reduce.cl", part_kernel, &part);
     if (st == SLUICE_OK)
         st = sl_embedded_cl_kernel(ctx, "reduce.cl", final_name, &final);
     if (st == SLUICE_OK) {
         /* The partial results, the result and the overflow flag (reduce.cl). */
-        parts = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, (global + 2) * 4, NULL, &err);
+        parts = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, (m_parts + 2) * 4, NULL, &err);
         if (!parts)
             st = sl_cl_fail(ctx, err, "sluice_reduce: allocating partial results");
     }
     if (st == SLUICE_OK) {
-        cl_uint c = (cl_uint)chunk, m = (cl_uint)global;
+        cl_uint c = (cl_uint)chunk, m = (cl_uint)m_parts;
         sl_set_arg(part, 0, sizeof(cl_mem), &ctx->vars, &err);
         sl_set_arg(part, 1, sizeof(cl_uint), &in_var, &err);
         sl_set_arg(part, 2, sizeof(cl_uint), &n_fixed, &err);
@@ -104,18 +113,22 @@ sluice_status sluice_reduce(sluice_context *ctx, sluice_stream *in, sluice_scala
         sl_set_arg(part, 4, sizeof(cl_uint), &c, &err);
         sl_set_arg(part, 5, sizeof(cl_mem), &in->mem, &err);
         sl_set_arg(part, 6, sizeof(cl_mem), &parts, &err);
+        if (group > 1)
+            sl_set_arg(part, 7, group * 4, NULL, &err);
         sl_set_arg(final, 0, sizeof(cl_mem), &parts, &err);
         sl_set_arg(final, 1, sizeof(cl_uint), &m, &err);
+        sl_set_arg(final, 2, group * 4, NULL, &err);
         if (err != CL_SUCCESS)
             st = sl_cl_fail(ctx, err, "sluice_reduce: setting kernel arguments");
     }
     const sl_raw_io io_part = {n_fixed, in_var, limit, 4}; /* for the profile */
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, part, part_name, global, REDUCE_LOCAL, &io_part);
+        st = sl_enqueue_raw(ctx, part, part_name, global, group > 1 ? group : REDUCE_LOCAL,
+                            &io_part);
     if (st == SLUICE_OK)
-        st = sl_enqueue_raw(ctx, final, final_name, 1, 1, SL_RAW_IO(global, 4));
+        st = sl_enqueue_raw(ctx, final, final_name, group, group, SL_RAW_IO(m_parts, 4));
     if (st == SLUICE_OK)
-        st = sl_read_flagged(ctx, parts, global, result, in, "sluice_reduce", "result");
+        st = sl_read_flagged(ctx, parts, m_parts, result, in, "sluice_reduce", "result");
     if (parts)
         clReleaseMemObject(parts);
     if (part)
