@@ -10,6 +10,8 @@
  * all records of smaller digits and after digit d's records of chunks < c, so
  * the sort is stable. */
 
+#include "sluice.cl"
+
 #define RADIX 256u
 
 /* Records [*b, *e) of chunk c when n records are cut into `chunks` chunks. */
@@ -182,5 +184,113 @@ __kernel void radix_scatter_pairs(global const uint *keys_in, global const uint 
             keys_out[p + q] = bk[d * WC + q];
             vals_out[p + q] = bv[d * WC + q];
         }
+    }
+}
+
+/* ------------------------------------------------------------------ */
+/* The GPU layout (the runtime's interleaved layout, SLUICE_LAYOUT):   */
+/* work-groups of G work-items (a power of two, at most 256) on tiles  */
+/* of RG_ROUNDS x G keys, 4-bit digits                                 */
+/* ------------------------------------------------------------------ */
+
+/* Same stable LSD sort, laid out for GPUs: a work-group takes each tile and
+ * its work-items read neighbouring keys (coalesced), G keys per round. Per
+ * pass: a per-tile histogram in local memory (16 digits), an exclusive scan
+ * of the digit-major table of digits x tiles by one work-group, and a
+ * per-tile scatter in which each key's place among the keys of its digit in
+ * its round is counted over the work-items before it, so the sort stays
+ * stable. Digits of 4 bits keep the local tables small: eight passes at
+ * most, and the passes in which every key has the same digit are skipped. */
+#define RG_BINS 16u
+#define RG_PASSES 8u
+
+/* The keys [*b, *e) of this work-group's tile. */
+inline void rg_tile(uint n, uint tile, uint *b, uint *e)
+{
+    ulong s = (ulong)get_group_id(0) * tile;
+    *b = (uint)min(s, (ulong)n);
+    *e = (uint)min(s + tile, (ulong)n);
+}
+
+/* totals[p * RG_BINS + d] += keys whose digit p (bits 4p .. 4p + 3) is d. */
+__kernel void radix_wg_hist_all(global const uint *keys, uint n, uint tile, global uint *totals)
+{
+    local uint h[RG_PASSES * RG_BINS];
+    uint l = (uint)get_local_id(0), g = (uint)get_local_size(0), b, e;
+    for (uint i = l; i < RG_PASSES * RG_BINS; i += g)
+        h[i] = 0u;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    rg_tile(n, tile, &b, &e);
+    for (uint i = b + l; i < e; i += g) {
+        uint k = keys[i];
+        for (uint p = 0; p < RG_PASSES; ++p)
+            atomic_inc(&h[p * RG_BINS + ((k >> (4u * p)) & 15u)]);
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint i = l; i < RG_PASSES * RG_BINS; i += g)
+        if (h[i])
+            atomic_add(&totals[i], h[i]);
+}
+
+/* table[d * tiles + tile] = this tile's keys of digit d (at `shift`). */
+__kernel void radix_wg_hist(global const uint *keys, uint n, uint tile, uint shift,
+                            global uint *table, uint tiles)
+{
+    local uint h[RG_BINS];
+    uint l = (uint)get_local_id(0), g = (uint)get_local_size(0), b, e;
+    if (l < RG_BINS)
+        h[l] = 0u;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    rg_tile(n, tile, &b, &e);
+    for (uint i = b + l; i < e; i += g)
+        atomic_inc(&h[(keys[i] >> shift) & 15u]);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (l < RG_BINS)
+        table[l * tiles + get_group_id(0)] = h[l];
+}
+
+/* Exclusive scan of the table in place, by one work-group. */
+__kernel void radix_wg_scan(global uint *table, uint count, local uint *part)
+{
+    if (get_group_id(0) != 0)
+        return;
+    SLUICE_GROUP_SCAN_(uint, table, count, 0u, part);
+}
+
+/* The tile's keys (and values, when has_values) to their places: the
+ * scanned table gives each digit's first place for the tile; each round of G
+ * keys, a key goes after the keys of its digit in earlier rounds and after
+ * those of the work-items before it in its round. */
+__kernel void radix_wg_scatter(global const uint *keys_in, global const uint *vals_in,
+                               global uint *keys_out, global uint *vals_out, uint has_values,
+                               uint n, uint tile, uint shift, global const uint *table, uint tiles)
+{
+    local uint base[RG_BINS], count[RG_BINS], digs[256];
+    uint l = (uint)get_local_id(0), g = (uint)get_local_size(0), b, e;
+    if (l < RG_BINS)
+        base[l] = table[l * tiles + get_group_id(0)];
+    rg_tile(n, tile, &b, &e);
+    for (uint r = b; r < e; r += g) {
+        uint i = r + l, valid = i < e;
+        uint k = valid ? keys_in[i] : 0u, d = valid ? (k >> shift) & 15u : RG_BINS;
+        digs[l] = d;
+        if (l < RG_BINS)
+            count[l] = 0u;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        uint rank = 0u;
+        for (uint j = 0; j < l; ++j)
+            rank += digs[j] == d;
+        if (valid)
+            atomic_inc(&count[d]);
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (valid) {
+            uint at = base[d] + rank;
+            keys_out[at] = k;
+            if (has_values)
+                vals_out[at] = vals_in[i];
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (l < RG_BINS)
+            base[l] += count[l];
     }
 }

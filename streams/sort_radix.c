@@ -7,7 +7,11 @@
  * chunk (work-groups of one), so each pass is a serial histogram and a
  * serial, stable scatter per chunk with only a small table scan between. The
  * first launch counts all four digits at once; passes in which every key has
- * the same digit would only copy, so they are skipped. */
+ * the same digit would only copy, so they are skipped.
+ *
+ * With the GPU layout (SLUICE_LAYOUT_INTERLEAVED) a work-group takes each
+ * tile of keys instead, its work-items reading neighbouring keys, with 4-bit
+ * digits so that its tables fit in local memory (sort_radix_groups). */
 #include "common.h"
 #include "sluice/streams.h"
 
@@ -22,6 +26,161 @@
 #define CHUNKS_PER_UNIT 8u
 /* Records below which a chunk is not worth its histogram table. */
 #define MIN_CHUNK 16384u
+
+/* The scratch of one sort: keys and values (when there are values) to
+ * ping-pong with, and a table of `table_bytes`. */
+static sluice_status radix_scratch(sluice_context *ctx, size_t n, int with_values,
+                                   size_t table_bytes, cl_mem *tmp_keys, cl_mem *tmp_vals,
+                                   cl_mem *table)
+{
+    cl_int err = CL_SUCCESS;
+    *tmp_keys = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, n * sizeof(cl_uint), NULL, &err);
+    if (*tmp_keys && with_values)
+        *tmp_vals = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, n * sizeof(cl_uint), NULL, &err);
+    if (*tmp_keys && (*tmp_vals || !with_values))
+        *table = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, table_bytes, NULL, &err);
+    if (!*table)
+        return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY,
+                       "sluice_sort_radix: cannot allocate scratch for %zu records (%s)", n,
+                       sl_cl_error_string(err));
+    return SLUICE_OK;
+}
+
+/* An odd number of passes leaves the result in the scratch buffers (cur_k,
+ * cur_v): copies it back to the streams. */
+static sluice_status radix_copy_back(sluice_context *ctx, cl_mem cur_k, cl_mem cur_v,
+                                     sluice_stream *keys, sluice_stream *values, size_t n)
+{
+    if (cur_k == keys->mem)
+        return SLUICE_OK;
+    cl_int err =
+        clEnqueueCopyBuffer(ctx->queue, cur_k, keys->mem, 0, 0, n * sizeof(cl_uint), 0, NULL, NULL);
+    if (err == CL_SUCCESS && values)
+        err = clEnqueueCopyBuffer(ctx->queue, cur_v, values->mem, 0, 0, n * sizeof(cl_uint), 0,
+                                  NULL, NULL);
+    return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "copying the sorted records back");
+}
+
+/* Releases a sort's kernels and buffers (NULL entries are skipped). OpenCL
+ * keeps released buffers alive until the queued work is done. */
+static void radix_release(cl_kernel *k, size_t nk, cl_mem *m, size_t nm)
+{
+    for (size_t i = 0; i < nk; ++i)
+        if (k[i])
+            clReleaseKernel(k[i]);
+    for (size_t i = 0; i < nm; ++i)
+        if (m[i])
+            clReleaseMemObject(m[i]);
+}
+
+/* The GPU layout's sort (kernels/sort_radix.cl, radix_wg_*): 4-bit digits,
+ * work-groups of ctx->group on tiles of RG_ROUNDS rounds of a key per
+ * work-item. */
+#define RG_BINS 16u
+#define RG_PASSES 8u
+#define RG_ROUNDS 8u
+
+static sluice_status sort_radix_groups(sluice_context *ctx, sluice_stream *keys,
+                                       sluice_stream *values, size_t n)
+{
+    const size_t group = ctx->group;
+    const cl_uint nn = (cl_uint)n, tile = (cl_uint)(group * RG_ROUNDS);
+    const cl_uint tiles = (cl_uint)((n + tile - 1) / tile), count = RG_BINS * tiles;
+    const cl_uint has_values = values ? 1u : 0u;
+    cl_kernel k_all = NULL, k_hist = NULL, k_scan = NULL, k_scatter = NULL;
+    cl_mem tmp_keys = NULL, tmp_vals = NULL, table = NULL, totals = NULL;
+    cl_uint host_totals[RG_PASSES * RG_BINS];
+    cl_int err = CL_SUCCESS;
+    sluice_status st = SLUICE_OK;
+    st = radix_scratch(ctx, n, values != NULL, (size_t)count * sizeof(cl_uint), &tmp_keys,
+                       &tmp_vals, &table);
+    if (st == SLUICE_OK) {
+        totals = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, sizeof host_totals, NULL, &err);
+        if (!totals)
+            st = sl_cl_fail(ctx, err, "sluice_sort_radix: allocating the digit totals");
+    }
+    if (st != SLUICE_OK)
+        goto done;
+    st = sl_embedded_cl_kernel(ctx, "sort_radix.cl", "radix_wg_hist_all", &k_all);
+    if (st == SLUICE_OK)
+        st = sl_embedded_cl_kernel(ctx, "sort_radix.cl", "radix_wg_hist", &k_hist);
+    if (st == SLUICE_OK)
+        st = sl_embedded_cl_kernel(ctx, "sort_radix.cl", "radix_wg_scan", &k_scan);
+    if (st == SLUICE_OK)
+        st = sl_embedded_cl_kernel(ctx, "sort_radix.cl", "radix_wg_scatter", &k_scatter);
+    if (st != SLUICE_OK)
+        goto done;
+    /* Every digit's totals, to skip the passes that would only copy: the
+     * one point where the sort waits. */
+    static const cl_uint zero[RG_PASSES * RG_BINS];
+    err = clEnqueueWriteBuffer(ctx->queue, totals, CL_FALSE, 0, sizeof zero, zero, 0, NULL, NULL);
+    if (err != CL_SUCCESS) {
+        st = sl_cl_fail(ctx, err, "clearing the radix totals");
+        goto done;
+    }
+    st = sl_set_args(ctx, k_all, "radix_wg_hist_all", 4,
+                     SIZES(sizeof(cl_mem), sizeof nn, sizeof tile, sizeof(cl_mem)),
+                     VALUES(&keys->mem, &nn, &tile, &totals));
+    if (st == SLUICE_OK)
+        st = sl_enqueue_raw(ctx, k_all, "radix_hist_all", (size_t)tiles * group, group,
+                            SL_RAW_IO(nn, 4));
+    if (st != SLUICE_OK)
+        goto done;
+    err = clEnqueueReadBuffer(ctx->queue, totals, CL_TRUE, 0, sizeof host_totals, host_totals, 0,
+                              NULL, NULL);
+    if (err != CL_SUCCESS) {
+        st = sl_cl_fail(ctx, err, "reading the radix totals");
+        goto done;
+    }
+    cl_mem cur_k = keys->mem, alt_k = tmp_keys;
+    cl_mem cur_v = values ? values->mem : keys->mem, alt_v = values ? tmp_vals : tmp_keys;
+    for (cl_uint p = 0; p < RG_PASSES && st == SLUICE_OK; ++p) {
+        int skip = 0;
+        for (cl_uint d = 0; d < RG_BINS && !skip; ++d)
+            skip = host_totals[p * RG_BINS + d] == nn;
+        if (skip)
+            continue;
+        cl_uint shift = 4u * p;
+        st = sl_set_args(ctx, k_hist, "radix_wg_hist", 6,
+                         SIZES(sizeof(cl_mem), sizeof nn, sizeof tile, sizeof shift, sizeof(cl_mem),
+                               sizeof tiles),
+                         VALUES(&cur_k, &nn, &tile, &shift, &table, &tiles));
+        if (st == SLUICE_OK)
+            st = sl_enqueue_raw(ctx, k_hist, "radix_hist", (size_t)tiles * group, group,
+                                SL_RAW_IO(nn, 4));
+        if (st == SLUICE_OK) {
+            sl_set_arg(k_scan, 0, sizeof(cl_mem), &table, &err);
+            sl_set_arg(k_scan, 1, sizeof count, &count, &err);
+            sl_set_arg(k_scan, 2, (group + 1) * sizeof(cl_uint), NULL, &err);
+            st = err == CL_SUCCESS
+                     ? sl_enqueue_raw(ctx, k_scan, "radix_scan", group, group, SL_RAW_IO(count, 8))
+                     : sl_cl_fail(ctx, err, "setting radix_wg_scan's arguments");
+        }
+        if (st == SLUICE_OK)
+            st = sl_set_args(ctx, k_scatter, "radix_wg_scatter", 10,
+                             SIZES(sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem),
+                                   sizeof has_values, sizeof nn, sizeof tile, sizeof shift,
+                                   sizeof(cl_mem), sizeof tiles),
+                             VALUES(&cur_k, &cur_v, &alt_k, &alt_v, &has_values, &nn, &tile, &shift,
+                                    &table, &tiles));
+        if (st == SLUICE_OK)
+            st = sl_enqueue_raw(ctx, k_scatter,
+                                values ? "radix_scatter_pairs" : "radix_scatter_keys",
+                                (size_t)tiles * group, group, SL_RAW_IO(nn, values ? 16 : 8));
+        cl_mem t_k = cur_k, t_v = cur_v;
+        cur_k = alt_k;
+        cur_v = alt_v;
+        alt_k = t_k;
+        alt_v = t_v;
+    }
+    if (st == SLUICE_OK)
+        st = radix_copy_back(ctx, cur_k, cur_v, keys, values, n);
+done:;
+    cl_kernel ks[] = {k_all, k_hist, k_scan, k_scatter};
+    cl_mem ms[] = {tmp_keys, tmp_vals, table, totals};
+    radix_release(ks, 4, ms, 4);
+    return st;
+}
 
 sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice_stream *values)
 {
@@ -45,6 +204,8 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
     }
     if (n < 2)
         return SLUICE_OK;
+    if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED)
+        return sort_radix_groups(ctx, keys, values, n);
 
     cl_uint chunks = ctx->info.compute_units * CHUNKS_PER_UNIT;
     if (chunks < 1)
@@ -64,18 +225,10 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
         st = sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
         goto done;
     }
-    tmp_keys = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, n * sizeof(cl_uint), NULL, &err);
-    if (tmp_keys && values)
-        tmp_vals = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, n * sizeof(cl_uint), NULL, &err);
-    if (tmp_keys && (tmp_vals || !values))
-        table = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE,
-                               (size_t)RADIX_PASSES * table_len * sizeof(cl_uint), NULL, &err);
-    if (!table) {
-        st = sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY,
-                     "sluice_sort_radix: cannot allocate scratch for %zu records (%s)", n,
-                     sl_cl_error_string(err));
+    st = radix_scratch(ctx, n, values != NULL, (size_t)RADIX_PASSES * table_len * sizeof(cl_uint),
+                       &tmp_keys, &tmp_vals, &table);
+    if (st != SLUICE_OK)
         goto done;
-    }
     st = sl_embedded_cl_kernel(ctx, "sort_radix.cl", "radix_hist_all", &k_all);
     if (st == SLUICE_OK)
         st = sl_embedded_cl_kernel(ctx, "sort_radix.cl", "radix_hist", &k_hist);
@@ -159,33 +312,12 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
         alt_k = t_k;
         alt_v = t_v;
     }
-    /* An odd number of passes leaves the result in the scratch buffers. */
-    if (cur_k != keys->mem) {
-        err = clEnqueueCopyBuffer(ctx->queue, cur_k, keys->mem, 0, 0, n * sizeof(cl_uint), 0, NULL,
-                                  NULL);
-        if (err == CL_SUCCESS && values)
-            err = clEnqueueCopyBuffer(ctx->queue, cur_v, values->mem, 0, 0, n * sizeof(cl_uint), 0,
-                                      NULL, NULL);
-        if (err != CL_SUCCESS)
-            st = sl_cl_fail(ctx, err, "copying the sorted records back");
-    }
+    st = radix_copy_back(ctx, cur_k, cur_v, keys, values, n);
 
-done:
-    /* OpenCL keeps released buffers alive until the queued work is done. */
-    if (k_all)
-        clReleaseKernel(k_all);
-    if (k_hist)
-        clReleaseKernel(k_hist);
-    if (k_scan)
-        clReleaseKernel(k_scan);
-    if (k_scatter)
-        clReleaseKernel(k_scatter);
-    if (tmp_keys)
-        clReleaseMemObject(tmp_keys);
-    if (tmp_vals)
-        clReleaseMemObject(tmp_vals);
-    if (table)
-        clReleaseMemObject(table);
+done:;
+    cl_kernel ks[] = {k_all, k_hist, k_scan, k_scatter};
+    cl_mem ms[] = {tmp_keys, tmp_vals, table};
+    radix_release(ks, 4, ms, 3);
     free(host_table);
     return st;
 }
