@@ -159,6 +159,7 @@ struct sluice_kernel {
     unsigned out_arg[SLUICE_MAX_OUTPUTS];
     sluice_output_mode out_mode[SLUICE_MAX_OUTPUTS];
     sluice_counters *counters;
+    size_t group;        /* work-group size of its launches (sl_kernel_group) */
     cl_uint prof_var;    /* 1 + SLUICE_MAX_OUTPUTS vars when profiling */
     size_t prof_entry;   /* valid while prof_epoch is the context's */
     unsigned prof_epoch; /* 0: not launched since the last reset */
@@ -256,6 +257,13 @@ typedef struct sl_raw_io {
  * event time and the records of `io` (may be NULL: none). */
 sluice_status sl_enqueue_raw(sluice_context *ctx, cl_kernel k, const char *name, size_t global,
                              size_t local, const sl_raw_io *io);
+
+/* The work-group size to launch kernel k with when `want` (a power of two)
+ * is asked: want, halved while the device cannot run k in groups that large
+ * (CL_KERNEL_WORK_GROUP_SIZE: a kernel that needs many registers may take
+ * fewer work-items per group than the device's maximum). Groups of up to 8
+ * are taken as they are. */
+size_t sl_kernel_group(sluice_context *ctx, cl_kernel k, size_t want);
 
 /* Profiling helpers (profile.c). */
 /* The entry named `name`, made if it is new (SL_NO_ENTRY out of memory). */

@@ -42,6 +42,7 @@ sluice_status sluice_kernel_create(sluice_program *program, const char *name, sl
     kn->cl = k;
     snprintf(kn->name, sizeof kn->name, "%s", name);
     kn->n_args = nargs - SL_HIDDEN_ARGS;
+    kn->group = sl_kernel_group(ctx, k, ctx->group);
     kn->prof_var = SL_NONE;
     size_t n = kn->n_args ? kn->n_args : 1;
     kn->arg_kind = calloc(n, sizeof *kn->arg_kind);
@@ -235,7 +236,7 @@ static size_t choose_chunk(const sluice_context *ctx, size_t bound)
  * first command (an ordered launch is two). */
 static sluice_status enqueue(sluice_kernel *k, size_t global, int first)
 {
-    size_t local = k->ctx->group;
+    size_t local = k->group;
     cl_event ev = NULL;
     cl_int err = clEnqueueNDRangeKernel(k->ctx->queue, k->cl, 1, NULL, &global, &local, 0, NULL,
                                         k->ctx->profile ? &ev : NULL);
@@ -350,7 +351,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 
     size_t chunk = choose_chunk(ctx, bound);
     size_t chunks = (bound + chunk - 1) / chunk;
-    size_t global = sl_round_up(chunks ? chunks : 1, ctx->group);
+    size_t global = sl_round_up(chunks ? chunks : 1, k->group);
     L.chunk = (cl_uint)chunk;
     L.stride = (cl_uint)(global + 1);
     L.counter_var = k->counters ? k->counters->var : SL_NONE;

@@ -351,13 +351,32 @@ void sl_set_arg(cl_kernel k, cl_uint i, size_t size, const void *value, cl_int *
         *err = clSetKernelArg(k, i, size, value);
 }
 
+size_t sl_kernel_group(sluice_context *ctx, cl_kernel k, size_t want)
+{
+    if (want <= 8)
+        return want;
+    size_t most = 0;
+    if (clGetKernelWorkGroupInfo(k, ctx->device, CL_KERNEL_WORK_GROUP_SIZE, sizeof most, &most,
+                                 NULL) != CL_SUCCESS ||
+        most == 0)
+        return want;
+    while (want > 1 && want > most)
+        want /= 2;
+    return want;
+}
+
 sluice_status sl_enqueue_raw(sluice_context *ctx, cl_kernel k, const char *name, size_t global,
                              size_t local, const sl_raw_io *io)
 {
     if (global == 0)
         return SLUICE_OK;
-    if (local)
-        global = sl_round_up(global, local);
+    if (local) {
+        /* as many groups, each smaller where the kernel needs it (the
+         * group kernels loop over their tile with the group's size) */
+        size_t groups = (global + local - 1) / local;
+        local = sl_kernel_group(ctx, k, local);
+        global = groups * local;
+    }
     cl_event ev = NULL;
     cl_int err = clEnqueueNDRangeKernel(ctx->queue, k, 1, NULL, &global, local ? &local : NULL, 0,
                                         NULL, ctx->profile ? &ev : NULL);
