@@ -5,9 +5,9 @@
  * counts[0..n) (at scratch + offset) becomes an exclusive scan that starts at
  * the output stream's current length, counts[n] receives the end, and the
  * length grows by the total. One work-group (SLUICE_GROUP_SCAN_; `part`
- * holds one uint per work-item and one more). The host launches one work-item on a CPU (a few
- * thousand counts, far less work than the launch it serves) and a group of
- * them on a GPU. */
+ * holds one uint per work-item and one more). The host launches one
+ * work-item on a CPU (a few thousand counts, far less work than the launch
+ * it serves) and a group of them on a GPU. */
 __kernel void sluice_scan_chunk_counts(global uint *vars, global uint *scratch, uint offset,
                                        uint var, uint n, local uint *part)
 {
