@@ -51,7 +51,8 @@ static void scan_input_init(sluice_stream *in, scan_input *si)
     }
     si->chunk = scan_chunk(si->bound);
     size_t chunks = (si->bound + si->chunk - 1) / si->chunk;
-    if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED) {
+    /* groups of one (a device that allows no more) take the per-work-item kernels */
+    if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED && ctx->group > 1) {
         si->group = ctx->group;
         si->chunks = chunks ? chunks : 1;
         si->global = si->chunks * si->group;
