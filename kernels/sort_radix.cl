@@ -93,98 +93,167 @@ __kernel void radix_scan(global uint *table, uint offset, uint count)
 }
 
 /* Scatter of one chunk, in input order, to the scanned positions, with
- * software write combining: each digit gathers WC records in a private buffer
- * (L1-resident) and writes them out together, so the output is written in
- * whole cache lines instead of one record at a time into RADIX (or 2 x RADIX
- * with values) scattered lines. On the 2-core Xeon this halved the scatter
- * time at 2^24 records. Order within a digit is kept: stable.
+ * software write combining: each digit gathers WC records (64 bytes) in a
+ * private buffer (L1-resident) and writes them out together, so the output
+ * is written in whole cache lines instead of one record at a time into
+ * RADIX (or 2 x RADIX with values) scattered lines. Order within a digit is
+ * kept: stable. Two ways, by output size (the host's `nt`, measured in
+ * bench/README.md):
  *
- * A full buffer is written out when the digit's next record arrives, not
- * when its last record went in: the write-out reads the buffer with vector
- * loads, and right after the 16 single-word stores that filled it those
- * loads wait for the stores to reach the cache (no store forwarding from
- * several stores to one load): profiled and measured in bench/README.md
- * (bench_streams). */
+ * - Smaller outputs (radix_scatter_groups): a digit's buffer goes out when
+ *   it holds WC records, wherever they land.
+ * - Outputs too large to stay in the cache (radix_scatter_lines): a digit's
+ *   buffer follows the output's own lines (a record's slot is its place mod
+ *   WC), and every line the chunk fills alone goes out as one aligned
+ *   64-byte non-temporal store: no read for ownership of a line that is
+ *   about to be overwritten, no cache evictions. The first and last line of
+ *   a digit, which the chunks before and after share, are written record by
+ *   record.
+ *
+ * Either way a full buffer is written out when the digit's next record
+ * arrives, not when its last record went in: the write-out reads the buffer
+ * with vector loads, and right after the 16 single-word stores that filled
+ * it those loads wait for the stores to reach the cache (no store
+ * forwarding from several stores to one load): profiled and measured in
+ * bench/README.md (bench_streams). */
 #define WC 16u
 
-/* Writes the WC buffered records of digit d (buffer buf) to out + pos[d]. */
-#define RADIX_FLUSH_(out, buf, d, p)                                                               \
-    do {                                                                                           \
-        for (uint q_ = 0; q_ < WC; ++q_)                                                           \
-            (out)[(p) + q_] = (buf)[(d)*WC + q_];                                                  \
-    } while (0)
+/* Clang's non-temporal store (PoCL, and most OpenCL compilers); a plain
+ * store where a compiler does not have it. */
+#if defined(__has_builtin)
+#if __has_builtin(__builtin_nontemporal_store)
+#define RADIX_NT_STORE_(v, p) __builtin_nontemporal_store((v), (p))
+#endif
+#endif
+#ifndef RADIX_NT_STORE_
+#define RADIX_NT_STORE_(v, p) (*(p) = (v))
+#endif
 
-__kernel void radix_scatter_keys(global const uint *keys_in, global uint *keys_out, uint n,
-                                 uint chunks, uint shift, global const uint *table, uint offset)
+__attribute__((always_inline)) inline void
+radix_scatter_groups(global const uint *keys_in, global const uint *vals_in, global uint *keys_out,
+                     global uint *vals_out, uint has_values, uint b, uint e, uint shift, uint *pos,
+                     uint *bk, uint *bv)
 {
-    uint c = (uint)get_global_id(0);
-    if (c >= chunks)
-        return;
-    uint pos[RADIX], fill[RADIX];
-    uint bk[RADIX * WC];
-    global const uint *t = table + offset;
-    for (uint d = 0; d < RADIX; ++d) {
-        pos[d] = t[d * chunks + c];
+    uint fill[RADIX];
+    for (uint d = 0; d < RADIX; ++d)
         fill[d] = 0u;
-    }
-    uint b, e;
-    radix_chunk(n, chunks, c, &b, &e);
     for (uint i = b; i < e; ++i) {
         uint k = keys_in[i];
         uint d = (k >> shift) & 0xffu;
         uint f = fill[d];
         if (f == WC) {
-            RADIX_FLUSH_(keys_out, bk, d, pos[d]);
+            for (uint q = 0; q < WC; ++q)
+                keys_out[pos[d] + q] = bk[d * WC + q];
+            if (has_values)
+                for (uint q = 0; q < WC; ++q)
+                    vals_out[pos[d] + q] = bv[d * WC + q];
             pos[d] += WC;
             f = 0u;
         }
         bk[d * WC + f] = k;
+        if (has_values)
+            bv[d * WC + f] = vals_in[i];
         fill[d] = f + 1u;
     }
-    for (uint d = 0; d < RADIX; ++d) {
-        uint p = pos[d];
-        for (uint q = 0; q < fill[d]; ++q)
-            keys_out[p + q] = bk[d * WC + q];
+    for (uint d = 0; d < RADIX; ++d)
+        for (uint q = 0; q < fill[d]; ++q) {
+            keys_out[pos[d] + q] = bk[d * WC + q];
+            if (has_values)
+                vals_out[pos[d] + q] = bv[d * WC + q];
+        }
+}
+
+/* Writes out the line of WC records at out + line from buffer buf: the whole
+ * line, non-temporal, when it holds no record before `first` (the chunk's
+ * first place for the digit), else its records from `first` on. */
+__attribute__((always_inline)) inline void radix_line_out(global uint *out, const uint *buf,
+                                                          uint line, uint first)
+{
+    if (line >= first) {
+        global uint8 *o = (global uint8 *)(out + line);
+        const uint8 *v = (const uint8 *)buf; /* 32-byte aligned: see the buffers */
+        RADIX_NT_STORE_(v[0], o);
+        RADIX_NT_STORE_(v[1], o + 1);
+    } else {
+        for (uint q = first - line; q < WC; ++q)
+            out[line + q] = buf[q];
     }
+}
+
+/* Needs 64-byte aligned outputs (see radix_scatter_chunk). */
+__attribute__((always_inline)) inline void
+radix_scatter_lines(global const uint *keys_in, global const uint *vals_in, global uint *keys_out,
+                    global uint *vals_out, uint has_values, uint b, uint e, uint shift, uint *pos,
+                    uint *bk, uint *bv)
+{
+    uint first[RADIX];
+    for (uint d = 0; d < RADIX; ++d)
+        first[d] = pos[d];
+    for (uint i = b; i < e; ++i) {
+        uint k = keys_in[i];
+        uint d = (k >> shift) & 0xffu;
+        uint p = pos[d], s = p & (WC - 1u);
+        if (s == 0u && p != first[d]) { /* the line before p is complete */
+            radix_line_out(keys_out, bk + d * WC, p - WC, first[d]);
+            if (has_values)
+                radix_line_out(vals_out, bv + d * WC, p - WC, first[d]);
+        }
+        bk[d * WC + s] = k;
+        if (has_values)
+            bv[d * WC + s] = vals_in[i];
+        pos[d] = p + 1u;
+    }
+    for (uint d = 0; d < RADIX; ++d) /* the last line of each digit */
+        for (uint q = max((pos[d] - 1u) & ~(WC - 1u), first[d]); q < pos[d]; ++q) {
+            keys_out[q] = bk[d * WC + (q & (WC - 1u))];
+            if (has_values)
+                vals_out[q] = bv[d * WC + (q & (WC - 1u))];
+        }
+}
+
+/* The scatter of chunk c, for keys alone or (has_values, a constant after
+ * inlining) for keys and values. */
+__attribute__((always_inline)) inline void
+radix_scatter_chunk(global const uint *keys_in, global const uint *vals_in, global uint *keys_out,
+                    global uint *vals_out, uint has_values, uint n, uint chunks, uint c, uint shift,
+                    global const uint *t, uint nt)
+{
+    uint pos[RADIX];
+    /* Aligned so that each digit's line is too (radix_line_out). */
+    uint bk[RADIX * WC] __attribute__((aligned(64)));
+    uint bv[RADIX * WC] __attribute__((aligned(64)));
+    for (uint d = 0; d < RADIX; ++d)
+        pos[d] = t[d * chunks + c];
+    uint b, e;
+    radix_chunk(n, chunks, c, &b, &e);
+    /* Whole-line stores need 64-byte aligned outputs (OpenCL buffers are
+     * aligned to CL_DEVICE_MEM_BASE_ADDR_ALIGN, 128 bytes on PoCL). */
+    if (nt && (((ulong)keys_out | (ulong)vals_out) & 63u) == 0u)
+        radix_scatter_lines(keys_in, vals_in, keys_out, vals_out, has_values, b, e, shift, pos, bk,
+                            bv);
+    else
+        radix_scatter_groups(keys_in, vals_in, keys_out, vals_out, has_values, b, e, shift, pos, bk,
+                             bv);
+}
+
+__kernel void radix_scatter_keys(global const uint *keys_in, global uint *keys_out, uint n,
+                                 uint chunks, uint shift, global const uint *table, uint offset,
+                                 uint nt)
+{
+    uint c = (uint)get_global_id(0);
+    if (c < chunks)
+        radix_scatter_chunk(keys_in, keys_in, keys_out, keys_out, 0u, n, chunks, c, shift,
+                            table + offset, nt);
 }
 
 __kernel void radix_scatter_pairs(global const uint *keys_in, global const uint *vals_in,
                                   global uint *keys_out, global uint *vals_out, uint n, uint chunks,
-                                  uint shift, global const uint *table, uint offset)
+                                  uint shift, global const uint *table, uint offset, uint nt)
 {
     uint c = (uint)get_global_id(0);
-    if (c >= chunks)
-        return;
-    uint pos[RADIX], fill[RADIX];
-    uint bk[RADIX * WC], bv[RADIX * WC];
-    global const uint *t = table + offset;
-    for (uint d = 0; d < RADIX; ++d) {
-        pos[d] = t[d * chunks + c];
-        fill[d] = 0u;
-    }
-    uint b, e;
-    radix_chunk(n, chunks, c, &b, &e);
-    for (uint i = b; i < e; ++i) {
-        uint k = keys_in[i];
-        uint d = (k >> shift) & 0xffu;
-        uint f = fill[d];
-        if (f == WC) {
-            RADIX_FLUSH_(keys_out, bk, d, pos[d]);
-            RADIX_FLUSH_(vals_out, bv, d, pos[d]);
-            pos[d] += WC;
-            f = 0u;
-        }
-        bk[d * WC + f] = k;
-        bv[d * WC + f] = vals_in[i];
-        fill[d] = f + 1u;
-    }
-    for (uint d = 0; d < RADIX; ++d) {
-        uint p = pos[d];
-        for (uint q = 0; q < fill[d]; ++q) {
-            keys_out[p + q] = bk[d * WC + q];
-            vals_out[p + q] = bv[d * WC + q];
-        }
-    }
+    if (c < chunks)
+        radix_scatter_chunk(keys_in, vals_in, keys_out, vals_out, 1u, n, chunks, c, shift,
+                            table + offset, nt);
 }
 
 /* ------------------------------------------------------------------ */

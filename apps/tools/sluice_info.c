@@ -186,9 +186,10 @@ int main(int argc, char **argv)
         printf("device %zu: %s / %s\n", i, d->platform, d->name);
         printf("  type %s, %s, %u compute units, max work-group %zu\n", d->is_cpu ? "CPU" : "other",
                d->version, d->compute_units, d->max_work_group_size);
-        printf("  global memory %.1f GiB, largest buffer %.1f GiB, local memory %.0f KiB\n",
+        printf("  global memory %.1f GiB, largest buffer %.1f GiB, local memory %.0f KiB, "
+               "cache %.1f MiB\n",
                (double)d->global_mem_bytes / (1 << 30), (double)d->max_alloc_bytes / (1 << 30),
-               (double)d->local_mem_bytes / 1024);
+               (double)d->local_mem_bytes / 1024, (double)d->cache_bytes / (1 << 20));
     }
     free(devs);
     return list_only ? 0 : self_test(device);

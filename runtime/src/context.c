@@ -26,6 +26,9 @@ static void fill_info(cl_platform_id p, cl_device_id d, sluice_device_info *info
     info->max_alloc_bytes = v;
     clGetDeviceInfo(d, CL_DEVICE_LOCAL_MEM_SIZE, sizeof v, &v, NULL);
     info->local_mem_bytes = v;
+    v = 0;
+    clGetDeviceInfo(d, CL_DEVICE_GLOBAL_MEM_CACHE_SIZE, sizeof v, &v, NULL);
+    info->cache_bytes = v;
 }
 
 /* Calls `visit` for every device of every platform; stops when it returns

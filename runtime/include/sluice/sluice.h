@@ -94,6 +94,7 @@ typedef struct sluice_device_info {
     uint64_t global_mem_bytes;  /**< CL_DEVICE_GLOBAL_MEM_SIZE */
     uint64_t max_alloc_bytes;   /**< CL_DEVICE_MAX_MEM_ALLOC_SIZE */
     uint64_t local_mem_bytes;   /**< CL_DEVICE_LOCAL_MEM_SIZE */
+    uint64_t cache_bytes;       /**< CL_DEVICE_GLOBAL_MEM_CACHE_SIZE (0: none reported) */
 } sluice_device_info;
 
 /**
