@@ -33,17 +33,20 @@
 #define NT_CACHE_FRACTION 8u
 
 /* The scratch of one sort: keys and values (when there are values) to
- * ping-pong with, and a table of `table_bytes`. */
+ * ping-pong with, kept by the context between sorts (sl_sort_scratch), and
+ * a table of `table_bytes` of its own. */
 static sluice_status radix_scratch(sluice_context *ctx, size_t n, int with_values,
                                    size_t table_bytes, cl_mem *tmp_keys, cl_mem *tmp_vals,
                                    cl_mem *table)
 {
+    cl_mem kv[2] = {NULL, NULL};
+    sluice_status st = sl_sort_scratch(ctx, n * sizeof(cl_uint), with_values, kv);
+    if (st != SLUICE_OK)
+        return st;
+    *tmp_keys = kv[0];
+    *tmp_vals = with_values ? kv[1] : NULL;
     cl_int err = CL_SUCCESS;
-    *tmp_keys = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, n * sizeof(cl_uint), NULL, &err);
-    if (*tmp_keys && with_values)
-        *tmp_vals = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, n * sizeof(cl_uint), NULL, &err);
-    if (*tmp_keys && (*tmp_vals || !with_values))
-        *table = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, table_bytes, NULL, &err);
+    *table = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, table_bytes, NULL, &err);
     if (!*table)
         return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY,
                        "sluice_sort_radix: cannot allocate scratch for %zu records (%s)", n,
@@ -182,8 +185,8 @@ static sluice_status sort_radix_groups(sluice_context *ctx, sluice_stream *keys,
         st = radix_copy_back(ctx, cur_k, cur_v, keys, values, n);
 done:;
     cl_kernel ks[] = {k_all, k_hist, k_scan, k_scatter};
-    cl_mem ms[] = {tmp_keys, tmp_vals, table, totals};
-    radix_release(ks, 4, ms, 4);
+    cl_mem ms[] = {table, totals}; /* the context keeps tmp_keys, tmp_vals */
+    radix_release(ks, 4, ms, 2);
     return st;
 }
 
@@ -324,8 +327,8 @@ sluice_status sluice_sort_radix(sluice_context *ctx, sluice_stream *keys, sluice
 
 done:;
     cl_kernel ks[] = {k_all, k_hist, k_scan, k_scatter};
-    cl_mem ms[] = {tmp_keys, tmp_vals, table};
-    radix_release(ks, 4, ms, 3);
+    cl_mem ms[] = {table}; /* the context keeps tmp_keys, tmp_vals */
+    radix_release(ks, 4, ms, 1);
     free(host_table);
     return st;
 }

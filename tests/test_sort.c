@@ -194,6 +194,36 @@ static void test_overflowed(sluice_context *ctx, const char *name, sort_fn sort)
     }
 }
 
+/* The radix sort's scratch is kept between sorts, grows to the largest and
+ * is freed by sluice_context_release_scratch; sorts are right throughout. */
+static void test_scratch(sluice_context *ctx)
+{
+    CHECK(sluice_context_sort_scratch_bytes(NULL) == 0, "sort scratch of no context");
+    sluice_context_release_scratch(NULL);
+    sluice_context_release_scratch(ctx);
+    CHECK(sluice_context_sort_scratch_bytes(ctx) == 0 && sluice_context_scratch_bytes(ctx) == 0,
+          "scratch after release: %zu, %zu", sluice_context_sort_scratch_bytes(ctx),
+          sluice_context_scratch_bytes(ctx));
+    const struct {
+        size_t n;
+        int values;
+        size_t kept; /* bytes the context holds after the sort */
+    } steps[] = {{1000, 0, 4000},  {1000, 1, 8000}, {500, 1, 8000}, {3001, 0, 12004},
+                 {3001, 1, 24008}, {1, 1, 24008},   {0, 0, 0},      {777, 1, 6216}};
+    for (size_t i = 0; i < sizeof steps / sizeof *steps; ++i) {
+        if (steps[i].n == 0 && steps[i].kept == 0) {
+            sluice_context_release_scratch(ctx);
+            continue;
+        }
+        run_case(ctx, "radix (kept scratch)", sluice_sort_radix, 1, steps[i].n, RANDOM,
+                 steps[i].values);
+        CHECK(sluice_context_sort_scratch_bytes(ctx) == steps[i].kept,
+              "after sorting %zu keys%s: %zu bytes of sort scratch, expected %zu", steps[i].n,
+              steps[i].values ? " and values" : "", sluice_context_sort_scratch_bytes(ctx),
+              steps[i].kept);
+    }
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
@@ -201,6 +231,7 @@ int main(void)
     test_errors(ctx, "bitonic", sluice_sort_bitonic);
     test_overflowed(ctx, "radix", sluice_sort_radix);
     test_overflowed(ctx, "bitonic", sluice_sort_bitonic);
+    test_scratch(ctx);
     test_sort(ctx, "radix", sluice_sort_radix, 1, (size_t)1 << 24);
     test_sort(ctx, "bitonic", sluice_sort_bitonic, 0, 0);
     sluice_context_destroy(ctx);

@@ -287,8 +287,7 @@ void sluice_context_destroy(sluice_context *ctx)
         }
         free(ctx->embedded);
     }
-    if (ctx->scratch)
-        clReleaseMemObject(ctx->scratch);
+    sluice_context_release_scratch(ctx);
     if (ctx->vars)
         clReleaseMemObject(ctx->vars);
     if (ctx->queue)
@@ -324,6 +323,29 @@ sluice_status sluice_context_finish(sluice_context *ctx)
 size_t sluice_context_scratch_bytes(const sluice_context *ctx)
 {
     return ctx ? ctx->scratch_bytes : 0;
+}
+
+size_t sluice_context_sort_scratch_bytes(const sluice_context *ctx)
+{
+    if (!ctx)
+        return 0;
+    return ctx->sort_scratch_bytes *
+           ((ctx->sort_scratch[0] != NULL) + (ctx->sort_scratch[1] != NULL));
+}
+
+void sluice_context_release_scratch(sluice_context *ctx)
+{
+    if (!ctx)
+        return;
+    /* An in-order queue: work queued before keeps the buffers alive. */
+    cl_mem *ms[] = {&ctx->scratch, &ctx->sort_scratch[0], &ctx->sort_scratch[1]};
+    for (size_t i = 0; i < sizeof ms / sizeof *ms; ++i) {
+        if (*ms[i])
+            clReleaseMemObject(*ms[i]);
+        *ms[i] = NULL;
+    }
+    ctx->scratch_bytes = 0;
+    ctx->sort_scratch_bytes = 0;
 }
 
 void *sluice_context_cl_context(sluice_context *ctx)
@@ -396,5 +418,30 @@ sluice_status sl_scratch_reserve(sluice_context *ctx, size_t bytes)
         clReleaseMemObject(ctx->scratch); /* in-order queue: pending users keep it alive */
     ctx->scratch = m;
     ctx->scratch_bytes = want;
+    return SLUICE_OK;
+}
+
+sluice_status sl_sort_scratch(sluice_context *ctx, size_t bytes, int two, cl_mem out[2])
+{
+    if (bytes > ctx->sort_scratch_bytes) { /* both buffers anew, at the new size */
+        for (int i = 0; i < 2; ++i) {
+            if (ctx->sort_scratch[i])
+                clReleaseMemObject(ctx->sort_scratch[i]); /* in-order queue, as above */
+            ctx->sort_scratch[i] = NULL;
+        }
+        ctx->sort_scratch_bytes = bytes;
+    }
+    for (int i = 0; i < 1 + (two != 0); ++i) {
+        if (!ctx->sort_scratch[i]) {
+            cl_int err;
+            ctx->sort_scratch[i] =
+                clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, ctx->sort_scratch_bytes, NULL, &err);
+            if (!ctx->sort_scratch[i])
+                return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY,
+                               "cannot allocate %zu bytes of sort scratch (%s)",
+                               ctx->sort_scratch_bytes, sl_cl_error_string(err));
+        }
+        out[i] = ctx->sort_scratch[i];
+    }
     return SLUICE_OK;
 }

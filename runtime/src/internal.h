@@ -83,6 +83,10 @@ struct sluice_context {
     /* Scratch for ordered outputs' per-chunk counts. */
     cl_mem scratch;
     size_t scratch_bytes;
+    /* The radix sort's ping-pong buffers for keys and values, each of
+     * sort_scratch_bytes (sl_sort_scratch). */
+    cl_mem sort_scratch[2];
+    size_t sort_scratch_bytes;
     /* Embedded programs built on demand, one per embedded source. */
     sluice_program **embedded;
     cl_kernel scan_kernel;
@@ -225,6 +229,9 @@ sluice_status sl_vars_fill(sluice_context *ctx, cl_uint first, size_t count, cl_
 
 /* Makes sure the ordered-output scratch holds at least `bytes`. */
 sluice_status sl_scratch_reserve(sluice_context *ctx, size_t bytes);
+/* The sort's two scratch buffers of at least `bytes` each (the second only
+ * when `two`), grown as needed and kept by the context. */
+sluice_status sl_sort_scratch(sluice_context *ctx, size_t bytes, int two, cl_mem out[2]);
 
 /* The context-owned program built from embedded source `name` (e.g.
  * "scan.cl"), compiled on first use. */

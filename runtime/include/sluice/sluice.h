@@ -178,6 +178,17 @@ sluice_status sluice_context_finish(sluice_context *ctx);
  *  per-chunk counts); it grows to the largest launch and is kept. */
 size_t sluice_context_scratch_bytes(const sluice_context *ctx);
 
+/** Bytes of device scratch the context holds for the radix sort (records to
+ *  ping-pong with: 4 bytes a key, 4 more a value); it grows to the largest
+ *  sort and is kept, so that repeated sorts (a grid or photon map rebuilt
+ *  every frame) neither allocate nor touch new memory. */
+size_t sluice_context_sort_scratch_bytes(const sluice_context *ctx);
+
+/** Frees the scratch the context keeps (both of the above) once the work
+ *  queued before it is done; the next call that needs scratch allocates
+ *  it again. For a program that sorted or split a large stream once. */
+void sluice_context_release_scratch(sluice_context *ctx);
+
 /** The underlying OpenCL objects, for interoperation (cl_context,
  *  cl_command_queue and cl_device_id, returned as void* so this header does
  *  not need the OpenCL headers). The context keeps ownership. */
