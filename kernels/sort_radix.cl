@@ -128,6 +128,17 @@ __kernel void radix_scan(global uint *table, uint offset, uint count)
 #ifndef RADIX_NT_STORE_
 #define RADIX_NT_STORE_(v, p) (*(p) = (v))
 #endif
+/* Non-temporal stores are weakly ordered on x86: a store fence makes them
+ * visible before the work-item ends (and so before the next launch reads
+ * them) whatever the runtime's own synchronisation orders. */
+#if defined(__has_builtin) && (defined(__x86_64__) || defined(__i386__))
+#if __has_builtin(__builtin_ia32_sfence)
+#define RADIX_NT_FENCE_() __builtin_ia32_sfence()
+#endif
+#endif
+#ifndef RADIX_NT_FENCE_
+#define RADIX_NT_FENCE_() mem_fence(CLK_GLOBAL_MEM_FENCE)
+#endif
 
 __attribute__((always_inline)) inline void
 radix_scatter_groups(global const uint *keys_in, global const uint *vals_in, global uint *keys_out,
@@ -209,6 +220,7 @@ radix_scatter_lines(global const uint *keys_in, global const uint *vals_in, glob
             if (has_values)
                 vals_out[q] = bv[d * WC + (q & (WC - 1u))];
         }
+    RADIX_NT_FENCE_();
 }
 
 /* The scatter of chunk c, for keys alone or (has_values, a constant after
