@@ -86,34 +86,87 @@ static void random_dir(uint32_t *st, float d[3])
              d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < 1e-4f);
 }
 
-/* Random rays: origins in the scene's box grown by 20% each way (so some
- * start outside the grid), directions uniform; every 8th ray aims at a
- * random triangle's centroid so that most rays hit. */
+/* A random point of the scene's box grown by 20% each way (so some rays
+ * start outside the grid). */
+static void random_origin(const sr_scene *s, uint32_t *st, float o[3])
+{
+    const sr_scene_stats *ss = sr_scene_statistics(s);
+    for (int k = 0; k < 3; ++k) {
+        float lo = ss->bounds_min[k], hi = ss->bounds_max[k], e = hi - lo;
+        o[k] = lo - 0.2f * e + 1.4f * e * frand(st);
+    }
+}
+
+/* The centroid of a random triangle. */
+static void random_centroid(const sr_scene *s, uint32_t *st, float c[3])
+{
+    const float *p = sr_scene_positions(s);
+    const uint32_t *ix = sr_scene_indices(s);
+    size_t t = check_rand(st) % sr_scene_triangle_count(s);
+    for (int k = 0; k < 3; ++k)
+        c[k] = (p[3 * ix[3 * t] + k] + p[3 * ix[3 * t + 1] + k] + p[3 * ix[3 * t + 2] + k]) / 3.0f;
+}
+
+/* Random rays: origins by random_origin, directions uniform; every 8th ray
+ * aims at a random triangle's centroid so that most rays hit. */
 static rt_ray *random_rays(const sr_scene *s, size_t n, uint32_t seed)
 {
     rt_ray *r = malloc(n * sizeof *r);
-    const sr_scene_stats *ss = sr_scene_statistics(s);
-    const float *p = sr_scene_positions(s);
-    const uint32_t *ix = sr_scene_indices(s);
-    size_t nt = sr_scene_triangle_count(s);
     uint32_t st = seed;
     for (size_t i = 0; i < n; ++i) {
         float o[3], d[3];
-        for (int k = 0; k < 3; ++k) {
-            float lo = ss->bounds_min[k], hi = ss->bounds_max[k], e = hi - lo;
-            o[k] = lo - 0.2f * e + 1.4f * e * frand(&st);
-        }
+        random_origin(s, &st, o);
         if (i % 8 == 0) {
-            size_t t = check_rand(&st) % nt;
+            random_centroid(s, &st, d);
             for (int k = 0; k < 3; ++k)
-                d[k] =
-                    (p[3 * ix[3 * t] + k] + p[3 * ix[3 * t + 1] + k] + p[3 * ix[3 * t + 2] + k]) /
-                        3.0f -
-                    o[k];
+                d[k] -= o[k];
         } else {
             random_dir(&st, d);
         }
         make_ray(&r[i], o, d);
+    }
+    return r;
+}
+
+/* Coherent rays, in bundles of 16 (the fused mode's packets): from a random
+ * origin as above to a 4x4 patch around a random triangle's centroid, a
+ * patch a hundredth of the scene across; every fourth bundle instead 16
+ * parallel rays along an axis (directions with two zero components) from a
+ * 4x4 patch of origins. */
+static rt_ray *coherent_rays(const sr_scene *s, size_t n, uint32_t seed)
+{
+    rt_ray *r = malloc(n * sizeof *r);
+    const sr_scene_stats *ss = sr_scene_statistics(s);
+    uint32_t st = seed;
+    float ext = 0.0f;
+    for (int k = 0; k < 3; ++k)
+        ext = fmaxf(ext, ss->bounds_max[k] - ss->bounds_min[k]);
+    float o[3] = {0, 0, 0}, c[3] = {0, 0, 0}, d[3];
+    for (size_t i = 0; i < n; ++i) {
+        size_t b = i / 16, l = i % 16;
+        if (l == 0) {
+            random_origin(s, &st, o);
+            random_centroid(s, &st, c);
+        }
+        float a = 0.01f * ext * ((float)(l % 4) - 1.5f), bb = 0.01f * ext * ((float)(l / 4) - 1.5f);
+        if (b % 4 == 3) {
+            /* along axis K, from the far side of the box, origins spread
+             * over the other two */
+            int K = (int)(b / 4 % 3), U = (K + 1) % 3, V = (K + 2) % 3;
+            float ro[3];
+            ro[K] = ss->bounds_min[K] - 0.1f * ext;
+            ro[U] = c[U] + a;
+            ro[V] = c[V] + bb;
+            d[K] = 1.0f;
+            d[U] = d[V] = 0.0f;
+            make_ray(&r[i], ro, d);
+        } else {
+            for (int k = 0; k < 3; ++k)
+                d[k] = c[k] - o[k];
+            d[(b % 3 + 1) % 3] += a;
+            d[(b % 3 + 2) % 3] += bb;
+            make_ray(&r[i], o, d);
+        }
     }
     return r;
 }
@@ -187,7 +240,7 @@ static size_t total_rays_checked;
 /* Traces `rays` in both modes and compares with the brute force on the first
  * `nbf` of them (all when nbf == n). */
 static void check_against_bf(const char *name, const sr_scene *s, rt_ray *rays, size_t n,
-                             size_t nbf)
+                             size_t nbf, int coherent)
 {
     rt_hit *ref = malloc(nbf * sizeof *ref), *got = malloc(n * sizeof *got);
     for (size_t i = 0; i < nbf; ++i)
@@ -195,7 +248,8 @@ static void check_against_bf(const char *name, const sr_scene *s, rt_ray *rays, 
     rt_hit *first = malloc(n * sizeof *first);
     /* the stream mode with the list copy and without it, then every way the
      * fused mode can traverse: a voxel at a time, walking ahead with the
-     * list copy, and without it */
+     * list copy, and without it, and coherent packets slice by slice (the
+     * same hits; its counts are slices and culled tests, so not compared) */
     static const struct {
         const char *name;
         rt_exec exec;
@@ -207,7 +261,9 @@ static void check_against_bf(const char *name, const sr_scene *s, rt_ray *rays, 
         {"stream, gather", RT_EXEC_STREAM, RT_WALK_AUTO, 0, ""},
         {"fused voxel", RT_EXEC_FUSED, RT_WALK_OFF, RT_LIST_COPY_MAX_DEFAULT, "a voxel at a time"},
         {"fused walk", RT_EXEC_FUSED, RT_WALK_ON, RT_LIST_COPY_MAX_DEFAULT, "list copy"},
-        {"fused walk, gather", RT_EXEC_FUSED, RT_WALK_ON, 0, "no list copy"}};
+        {"fused walk, gather", RT_EXEC_FUSED, RT_WALK_ON, 0, "no list copy"},
+        {"fused slices", RT_EXEC_FUSED, RT_WALK_SLICES, RT_LIST_COPY_MAX_DEFAULT,
+         "slice by slice"}};
     for (size_t e = 0; e < sizeof paths / sizeof *paths; ++e) {
         rt_tracer *t =
             make_tracer_walk(s, paths[e].exec, RT_ISECT_MT, paths[e].walk, paths[e].copy_max);
@@ -233,10 +289,26 @@ static void check_against_bf(const char *name, const sr_scene *s, rt_ray *rays, 
             memcpy(first, got, n * sizeof *got);
         } else {
             /* the two modes run the same math: identical hits on every ray */
-            size_t diff = 0;
-            for (size_t i = 0; i < n; ++i)
-                diff += first[i].tri != got[i].tri || first[i].t != got[i].t ||
-                        first[i].steps != got[i].steps || first[i].tests != got[i].tests;
+            int counts = paths[e].walk != RT_WALK_SLICES;
+            size_t diff = 0, counted_apart = 0;
+            uint64_t steps_dda = 0, steps_here = 0;
+            for (size_t i = 0; i < n; ++i) {
+                diff +=
+                    first[i].tri != got[i].tri || first[i].t != got[i].t ||
+                    (counts && (first[i].steps != got[i].steps || first[i].tests != got[i].tests));
+                counted_apart += first[i].steps != got[i].steps || first[i].tests != got[i].tests;
+                steps_dda += first[i].steps;
+                steps_here += got[i].steps;
+            }
+            if (!counts) {
+                /* the slices ran (their counts differ) on coherent bundles,
+                 * and a ray crosses no more slices than voxels */
+                printf("%-28s counts differ on %zu rays; %.2f slices against %.2f voxels a ray\n",
+                       what, counted_apart, (double)steps_here / (double)n,
+                       (double)steps_dda / (double)n);
+                CHECK(!coherent || counted_apart > 0, "%s: the slices never ran", what);
+                CHECK(steps_here <= steps_dda, "%s: more slices than voxels", what);
+            }
             CHECK(diff == 0, "%s: stream and %s differ on %zu of %zu rays", name, paths[e].name,
                   diff, n);
         }
@@ -269,7 +341,14 @@ static void test_random_rays(void)
             continue;
         }
         rt_ray *r = random_rays(s, cases[c].n, 1234u + (uint32_t)c);
-        check_against_bf(cases[c].name, s, r, cases[c].n, cases[c].nbf);
+        check_against_bf(cases[c].name, s, r, cases[c].n, cases[c].nbf, 0);
+        free(r);
+        /* packets of coherent rays: the fused mode's slices */
+        size_t nc = cases[c].n / 4, nbfc = cases[c].nbf < nc ? cases[c].nbf : nc;
+        char what[64];
+        snprintf(what, sizeof what, "%s coherent", cases[c].name);
+        r = coherent_rays(s, nc, 4321u + (uint32_t)c);
+        check_against_bf(what, s, r, nc, nbfc, 1);
         free(r);
         sr_scene_destroy(s);
     }
@@ -312,7 +391,7 @@ static void test_one_triangle_and_edges(void)
     CHECK(sr_scene_triangle_count(s) == 1, "degenerate triangle kept");
     CHECK(sr_scene_statistics(s)->degenerate_dropped == 1, "degenerate not counted");
     rt_ray *r = random_rays(s, 100000, 99);
-    check_against_bf("one-triangle", s, r, 100000, 100000);
+    check_against_bf("one-triangle", s, r, 100000, 100000, 0);
     free(r);
     sr_scene_destroy(s);
 
@@ -350,7 +429,7 @@ static void test_one_triangle_and_edges(void)
         make_ray(&rays[i], o, d);
     }
     rt_tracer_destroy(t);
-    check_against_bf("cornell-axis-and-corners", s, rays, n, n);
+    check_against_bf("cornell-axis-and-corners", s, rays, n, n, 0);
     free(rays);
     sr_scene_destroy(s);
 }

@@ -149,6 +149,7 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
 static sluice_status choose_fused_path(rt_tracer *t, char *err, size_t err_size)
 {
     t->walks_ahead = 0;
+    t->slices = 0;
     t->fused_path[0] = '\0';
     /* ten planes padded so that a 16-wide load from any entry stays inside */
     size_t stride = ((t->grid.cell_tri_count + 15) & ~(size_t)15) + 16;
@@ -169,17 +170,19 @@ static sluice_status choose_fused_path(rt_tracer *t, char *err, size_t err_size)
     if (st != SLUICE_OK)
         return st;
     double pct = cells ? 100.0 * (double)occupied / (double)cells : 0.0;
-    t->walks_ahead = t->opt.fused_walk == RT_WALK_ON ||
+    t->walks_ahead = t->opt.fused_walk == RT_WALK_ON || t->opt.fused_walk == RT_WALK_SLICES ||
                      (t->opt.fused_walk == RT_WALK_AUTO && 2 * occupied <= cells);
+    t->slices = t->walks_ahead && t->opt.fused_walk != RT_WALK_ON;
     if (!t->walks_ahead) {
         snprintf(t->fused_path, sizeof t->fused_path,
                  "a voxel at a time (%.0f%% of voxels hold triangles)", pct);
         return SLUICE_OK;
     }
     t->list_stride = bytes <= t->opt.list_copy_max ? stride : 0;
-    int w =
-        snprintf(t->fused_path, sizeof t->fused_path,
-                 "walk ahead %d voxels (%.0f%% of voxels hold triangles), ", RT_WALK_VOXELS, pct);
+    int w = snprintf(t->fused_path, sizeof t->fused_path,
+                     "%swalk ahead %d voxels (%.0f%% of voxels hold triangles), ",
+                     t->slices ? "coherent packets slice by slice, the others " : "",
+                     RT_WALK_VOXELS, pct);
     if (w > 0 && (size_t)w < sizeof t->fused_path) {
         if (t->list_stride)
             snprintf(t->fused_path + w, sizeof t->fused_path - (size_t)w, "list copy %.2f MB",
@@ -223,14 +226,15 @@ static sluice_status build_list_copy(rt_tracer *t)
 
 static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
 {
-    char opts[384], walk[96] = "";
+    char opts[384], walk[128] = "";
     if (!t->walks_ahead && t->list_stride)
         snprintf(walk, sizeof walk, " -DRT_LIST_COPY -DRT_LIST_STRIDE=%zuu", t->list_stride);
     else if (t->walks_ahead && t->list_stride)
-        snprintf(walk, sizeof walk, " -DRT_FUSED_WALK=%d -DRT_LIST_COPY -DRT_LIST_STRIDE=%zuu",
-                 RT_WALK_VOXELS, t->list_stride);
+        snprintf(walk, sizeof walk, " -DRT_FUSED_WALK=%d -DRT_LIST_COPY -DRT_LIST_STRIDE=%zuu%s",
+                 RT_WALK_VOXELS, t->list_stride, t->slices ? " -DRT_FUSED_SLICES" : "");
     else if (t->walks_ahead)
-        snprintf(walk, sizeof walk, " -DRT_FUSED_WALK=%d", RT_WALK_VOXELS);
+        snprintf(walk, sizeof walk, " -DRT_FUSED_WALK=%d%s", RT_WALK_VOXELS,
+                 t->slices ? " -DRT_FUSED_SLICES" : "");
     snprintf(opts, sizeof opts, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s",
              t->opt.unroll_steps, t->opt.unroll_tests,
              t->opt.intersector == RT_ISECT_WATERTIGHT ? " -DRT_WATERTIGHT" : "", walk);
@@ -282,7 +286,7 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sr_scene *scene,
     rt_tracer_options o = opt ? *opt : rt_tracer_options_default();
     if (o.unroll_steps == 0 || o.unroll_tests == 0 || o.unroll_steps > 4096 ||
         o.unroll_tests > 4096 || !(o.intersect_threshold >= 0.0f) || o.intersect_threshold > 1.0f ||
-        (unsigned)o.fused_walk > (unsigned)RT_WALK_ON) {
+        (unsigned)o.fused_walk > (unsigned)RT_WALK_SLICES) {
         sr_set_error(err, err_size,
                      "rt_tracer_create: bad options (min dim %u, unroll %u/%u, threshold %g)",
                      o.grid_min_dim, o.unroll_steps, o.unroll_tests, (double)o.intersect_threshold);

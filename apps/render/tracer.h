@@ -52,9 +52,14 @@ typedef enum rt_grid_build {
 
 /** How the fused mode's packets move through the grid (kernels/render/rt_fused.cl). */
 typedef enum rt_fused_walk {
-    RT_WALK_AUTO = 0, /**< walk ahead when at most half of the voxels hold triangles */
-    RT_WALK_OFF = 1,  /**< a voxel at a time: each voxel's tests before the next step */
-    RT_WALK_ON = 2    /**< walk ahead: step 4 voxels, then test them in order */
+    RT_WALK_AUTO = 0,  /**< RT_WALK_SLICES when at most half of the voxels hold
+                            triangles, else RT_WALK_OFF */
+    RT_WALK_OFF = 1,   /**< a voxel at a time: each voxel's tests before the next step */
+    RT_WALK_ON = 2,    /**< walk ahead: step 4 voxels, then test them in order */
+    RT_WALK_SLICES = 3 /**< coherent packets (eye rays, rays to a point) slice by
+                            slice of the grid, the others walking ahead. Same
+                            hits; a ray's counts are then the slices it crossed
+                            and the triangles left to test after a cull */
 } rt_fused_walk;
 
 /** Largest copy of the triangle records in list order that a tracer makes by
@@ -77,10 +82,12 @@ typedef struct rt_tracer_options {
     unsigned unroll_steps;     /**< stream mode: voxels per traverse pass (k) */
     unsigned unroll_tests;     /**< stream mode: triangle tests per intersect pass (m) */
     int ordered;               /**< stream mode: ORDERED outputs (else UNORDERED) */
-    /** Fused mode, Moller-Trumbore: walk ahead or a voxel at a time. Both
-     *  give the same hits and counts; walking ahead is faster on sparse
-     *  grids (bunny 10-20%, teapotahedron 20%), slower on dense ones
-     *  (cornell 25%), hence RT_WALK_AUTO's rule (bench_raytrace). */
+    /** Fused mode, Moller-Trumbore: slices, walk ahead or a voxel at a time.
+     *  All give the same hits, the last two the same counts; walking ahead
+     *  is faster on sparse grids (bunny 10-20%, teapotahedron 20%), slower
+     *  on dense ones (cornell 25%), and slices faster again for coherent
+     *  rays on sparse grids, slower on cornell: RT_WALK_AUTO's rule
+     *  (bench_raytrace; bench/README.md has the figures). */
     rt_fused_walk fused_walk;
     /** Moller-Trumbore, fused mode walking ahead or stream mode: the most
      *  bytes of the list-order copy of the triangle records (40 per grid

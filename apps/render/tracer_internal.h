@@ -27,9 +27,10 @@ struct rt_tracer {
     /* fused mode walking ahead (rt_fused.cl): the list-order copy of the
      * triangle records (NULL when the walk gathers instead) */
     int walks_ahead;
+    int slices; /* coherent packets slice by slice (RT_FUSED_SLICES) */
     sluice_stream *list_records;
     size_t list_stride; /* floats per plane of list_records */
-    char fused_path[128];
+    char fused_path[192];
 
     sluice_program *program;
     sluice_kernel *k_setup, *k_traverse, *k_intersect, *k_route_t, *k_route_i, *k_route_setup,

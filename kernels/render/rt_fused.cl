@@ -41,10 +41,11 @@ inline void rt_trace_one(const rt_grid_args *g, global const uint *cell_start,
 /* Packets: 16 rays in the lanes of one work-item (rt_lanes.cl)        */
 /* ------------------------------------------------------------------ */
 
-/* A work-item traces its rays 16 at a time, one per lane, so the hits and
- * the counts are the stream mode's bit for bit. Lanes advance in lockstep;
- * a lane whose voxel is empty, or whose ray is done, idles (masked). Two
- * ways, chosen by the host for the scene (tracer.c, choose_fused_path):
+/* A work-item traces its rays 16 at a time, one per lane, so the hits (and,
+ * but for the slices below, the counts) are the stream mode's bit for bit.
+ * Lanes advance in lockstep; a lane whose voxel is empty, or whose ray is
+ * done, idles (masked). Three ways, chosen by the host for the scene
+ * (tracer.c, choose_fused_path):
  *
  *   a voxel at a time (dense grids such as the Cornell box): each round
  *   reads the voxel's list bounds, tests, then steps. When all active lanes
@@ -59,9 +60,250 @@ inline void rt_trace_one(const rt_grid_args *g, global const uint *cell_start,
  *   crosses about 12 voxels and tests in 2; waiting on each voxel's bounds
  *   before stepping on cost more than the tests.
  *
+ *   slice by slice (RT_FUSED_SLICES, with RT_FUSED_WALK): a coherent packet
+ *   (eye rays, rays to a light) crosses the grid a slice of voxels at a
+ *   time (rt_trace_slices); packets that are not coherent walk ahead. The
+ *   hits are the same; the counts are the slices crossed and the tests
+ *   after a cull.
+ *
  * The watertight intersector keeps the scalar loop (rt_trace_one). */
 #if !defined(RT_WATERTIGHT) && !defined(RT_FUSED_SCALAR)
 #define RT_PACKET 16
+
+#ifdef RT_FUSED_SLICES
+/* The smallest of lo and the largest of hi over the lanes of m. */
+inline int2 rt_range16(int16 lo, int16 hi, int16 m)
+{
+    int16 a = select((int16)INT_MAX, lo, m), b = select((int16)INT_MIN, hi, m);
+    int8 a8 = min(a.lo, a.hi), b8 = max(b.lo, b.hi);
+    int4 a4 = min(a8.lo, a8.hi), b4 = max(b8.lo, b8.hi);
+    int2 a2 = min(a4.lo, a4.hi), b2 = max(b4.lo, b4.hi);
+    return (int2)(min(a2.x, a2.y), max(b2.x, b2.y));
+}
+
+/* The same for floats (one set of lanes for both). Scalar fmin and fmax
+ * became library calls in PoCL's code: compares instead. */
+inline float2 rt_frange16(float16 x, int16 m)
+{
+    float16 a = select((float16)INFINITY, x, m), b = select((float16)(-INFINITY), x, m);
+    float8 a8 = fmin(a.lo, a.hi), b8 = fmax(b.lo, b.hi);
+    float4 a4 = fmin(a8.lo, a8.hi), b4 = fmax(b8.lo, b8.hi);
+    float2 a2 = fmin(a4.lo, a4.hi), b2 = fmax(b4.lo, b4.hi);
+    return (float2)(a2.x < a2.y ? a2.x : a2.y, b2.x > b2.y ? b2.x : b2.y);
+}
+
+/* Component k (0, 1, 2) of three, for a k the same in every lane. */
+#define RT_PICK3_(k, a, b, c) ((k) == 0 ? (a) : ((k) == 1 ? (b) : (c)))
+
+/* The widest footprint, in voxels of one slice, for which a packet goes
+ * slice by slice (bench_raytrace's eye rays stay under 3 on the bunny). */
+#ifndef RT_SLICE_AREA
+#define RT_SLICE_AREA 6.0f
+#endif
+
+/* Floor of x clamped to [0, n - 1] (truncation is floor from 0 up; the
+ * library floor expanded to a dozen instructions). */
+inline int rt_cell_floor(float x, int n)
+{
+    return x <= 0.0f ? 0 : min((int)x, n - 1);
+}
+
+/* Coherent packets, slice by slice: the coherent grid traversal of Wald,
+ * Ize, Kensler, Knoll and Parker ("Ray tracing animated scenes using
+ * coherent grid traversal", SIGGRAPH 2006). When every ray of the packet
+ * moves the same way along one axis K, the packet crosses the grid one slice
+ * of voxels (one K index) at a time. The rays' extent across a slice is
+ * known from two reductions made once per packet (below), so the empty
+ * voxels of a slice cost one scalar read of their list bounds each, where
+ * the walk ahead gathers them lane by lane and steps every lane with about
+ * 80 vector instructions. A voxel that holds triangles is tested by the
+ * lanes whose rays cross it (a slab test), its triangles broadcast, each
+ * first checked against the part of the voxel the packet's rays cross in
+ * the slice (its box, from its v0, e1, e2): a triangle with no point there
+ * has no hit there, and its hits elsewhere are found in the voxels that hold
+ * them. On bench_raytrace's bunny-close eye rays this culled three of four
+ * broadcast tests.
+ *
+ * A lane stops after the slice where its nearest hit so far lies within the
+ * slice (so no voxel further on can hold a nearer one), as a ray of
+ * rt_trace_one stops in the voxel of its hit. Each hit is accepted only
+ * within its voxel's limit (rt_voxel_limit16, the exit computed as
+ * rt_voxel_exit does), so the hits are those of the other paths; the counts
+ * are not: a lane's voxels are the slices it crossed, its tests the
+ * triangles tested against it after the cull.
+ *
+ * Returns 0, having done nothing, when the packet is not coherent: no axis
+ * along which all its rays move the same way, or a footprint wider than
+ * RT_SLICE_AREA voxels at either end (bounce rays). */
+inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, float16 t1,
+                           int16 active, int16 cx, int16 cy, int16 cz,
+                           global const uint *cell_start, global const uint *cell_tris,
+                           global const float *tv, uint16 *steps, uint16 *tests)
+{
+    ushort am = sluice_mask16(active);
+    if (!am)
+        return 1;
+    /* K: of the axes along which every ray moves the same way, the one the
+     * first ray moves fastest along */
+    float16 dk3[3] = {P->dx, P->dy, P->dz};
+    int K = -1;
+    float best = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        int same = sluice_mask16(active & (dk3[k] > 0.0f)) == am ||
+                   sluice_mask16(active & (dk3[k] < 0.0f)) == am;
+        float d = fabs(as_float(rt_first_lane(as_int16(dk3[k]), am)));
+        if (same && (K < 0 || d > best)) {
+            K = k;
+            best = d;
+        }
+    }
+    if (K < 0)
+        return 0;
+    int U = K == 2 ? 0 : K + 1, V = U == 2 ? 0 : U + 1;
+    float16 oK = RT_PICK3_(K, P->ox, P->oy, P->oz), dK = RT_PICK3_(K, P->dx, P->dy, P->dz);
+    float16 iK = RT_PICK3_(K, P->ix, P->iy, P->iz);
+    float16 oU = RT_PICK3_(U, P->ox, P->oy, P->oz), dU = RT_PICK3_(U, P->dx, P->dy, P->dz);
+    float16 oV = RT_PICK3_(V, P->ox, P->oy, P->oz), dV = RT_PICK3_(V, P->dx, P->dy, P->dz);
+    float16 iU = RT_PICK3_(U, P->ix, P->iy, P->iz), iV = RT_PICK3_(V, P->ix, P->iy, P->iz);
+    int16 cK = RT_PICK3_(K, cx, cy, cz);
+    int sgn = as_float(rt_first_lane(as_int16(dK), am)) > 0.0f ? 1 : -1;
+    int nK = g->dims[K], nU = g->dims[U], nV = g->dims[V];
+    float loK = g->lo[K], cellK = g->cell[K], invK = g->inv_cell[K];
+    float loU = g->lo[U], cellU = g->cell[U], invU = g->inv_cell[U];
+    float loV = g->lo[V], cellV = g->cell[V], invV = g->inv_cell[V];
+    /* the slices from the first ray's entry to the last one's exit */
+    int16 eK = clamp(convert_int16(floor((oK + dK * t1 - loK) * invK)), 0, nK - 1);
+    int2 kr = rt_range16(cK, cK, active), er = rt_range16(eK, eK, active);
+    int s0 = sgn > 0 ? kr.x : kr.y, s1 = sgn > 0 ? er.y : er.x;
+    int ns = (s1 - s0) * sgn + 1;
+    if (ns <= 0)
+        return 1;
+    /* Each ray's U and V (in voxels) are linear in the position of a K
+     * plane, so their least over the rays is concave in it and their
+     * greatest convex: the chords between the first and the last plane
+     * bound them on every plane between. */
+    float pa = loK + (float)(s0 + (sgn < 0)) * cellK;
+    float pb = loK + (float)(s1 + (sgn > 0)) * cellK;
+    float16 ta = (pa - oK) * iK, tb = (pb - oK) * iK;
+    float2 ua = rt_frange16((oU + dU * ta - loU) * invU, active);
+    float2 ub = rt_frange16((oU + dU * tb - loU) * invU, active);
+    float2 va = rt_frange16((oV + dV * ta - loV) * invV, active);
+    float2 vb = rt_frange16((oV + dV * tb - loV) * invV, active);
+    if (!((ua.y - ua.x + 1.0f) * (va.y - va.x + 1.0f) <= RT_SLICE_AREA &&
+          (ub.y - ub.x + 1.0f) * (vb.y - vb.x + 1.0f) <= RT_SLICE_AREA))
+        return 0;
+    /* a lane parallel to U or V stays in one slab of it: the footprint
+     * already holds that slab */
+    int16 nzU = dU != 0.0f, nzV = dV != 0.0f;
+    float16 inf = (float16)INFINITY;
+    float inv_ns = 1.0f / (float)ns;
+    int16 alive = active, last = eK; /* last: the slice where a lane stopped */
+    for (int k = 0; k < ns; ++k) {
+        int s = s0 + sgn * k;
+        float f0 = (float)k * inv_ns, f1 = (float)(k + 1) * inv_ns;
+        /* the footprint on the slice's two planes, padded by a thousandth of
+         * a voxel against rounding */
+        float a0 = ua.x + (ub.x - ua.x) * f0, a1 = ua.x + (ub.x - ua.x) * f1;
+        float b0 = ua.y + (ub.y - ua.y) * f0, b1 = ua.y + (ub.y - ua.y) * f1;
+        float umin = (a0 < a1 ? a0 : a1) - 1e-3f, umax = (b0 > b1 ? b0 : b1) + 1e-3f;
+        a0 = va.x + (vb.x - va.x) * f0;
+        a1 = va.x + (vb.x - va.x) * f1;
+        b0 = va.y + (vb.y - va.y) * f0;
+        b1 = va.y + (vb.y - va.y) * f1;
+        float vmin = (a0 < a1 ? a0 : a1) - 1e-3f, vmax = (b0 > b1 ? b0 : b1) + 1e-3f;
+        int u0 = rt_cell_floor(umin, nU), u1 = rt_cell_floor(umax, nU);
+        int v0 = rt_cell_floor(vmin, nV), v1 = rt_cell_floor(vmax, nV);
+        int tested = 0;
+        float16 tkin = (float16)0.0f, tkout = (float16)0.0f;
+        for (int v = v0; v <= v1; ++v)
+            for (int u = u0; u <= u1; ++u) {
+                int c[3];
+                c[K] = s;
+                c[U] = u;
+                c[V] = v;
+                uint ci =
+                    (uint)c[0] + (uint)g->dims[0] * ((uint)c[1] + (uint)g->dims[1] * (uint)c[2]);
+                uint a = cell_start[ci], b = cell_start[ci + 1u];
+                if (a >= b)
+                    continue;
+                /* the lanes whose rays cross the voxel, and where they leave
+                 * it: each face's parameter as rt_voxel_exit computes it */
+                if (!tested) {
+                    tkin = (loK + (float)(s + (sgn < 0)) * cellK - oK) * iK;
+                    tkout = (loK + (float)(s + (sgn > 0)) * cellK - oK) * iK;
+                }
+                float16 fa = (loU + (float)u * cellU - oU) * iU;
+                float16 fb = (loU + (float)(u + 1) * cellU - oU) * iU;
+                float16 tn = fmax(tkin, select(-inf, fmin(fa, fb), nzU));
+                float16 te = fmin(tkout, select(inf, fmax(fa, fb), nzU));
+                fa = (loV + (float)v * cellV - oV) * iV;
+                fb = (loV + (float)(v + 1) * cellV - oV) * iV;
+                tn = fmax(tn, select(-inf, fmin(fa, fb), nzV));
+                te = fmin(te, select(inf, fmax(fa, fb), nzV));
+                int16 m = alive & (tn <= te + fabs(te) * 1e-5f) & (te >= t0) & (tn <= t1);
+                if (!rt_any16(m))
+                    continue;
+                tested = 1;
+                float16 limit = select(rt_voxel_limit16(te, P->tmax), P->tmax, P->any_hit);
+                /* the box the packet's rays cross in this voxel, padded */
+                float bl[3], bh[3];
+                for (int j = 0; j < 3; ++j) {
+                    bl[j] = g->lo[j] + (float)c[j] * g->cell[j];
+                    bh[j] = bl[j] + g->cell[j];
+                }
+                float w = loU + umin * cellU;
+                bl[U] = w > bl[U] ? w : bl[U];
+                w = loU + umax * cellU;
+                bh[U] = w < bh[U] ? w : bh[U];
+                w = loV + vmin * cellV;
+                bl[V] = w > bl[V] ? w : bl[V];
+                w = loV + vmax * cellV;
+                bh[V] = w < bh[V] ? w : bh[V];
+                for (int j = 0; j < 3; ++j) {
+                    bl[j] -= 1e-3f * g->cell[j];
+                    bh[j] += 1e-3f * g->cell[j];
+                }
+                for (uint j = a; j < b; ++j) {
+                    uint tri = cell_tris[j];
+                    global const float *q = tv + 9u * (size_t)tri;
+                    float x = q[0], y = q[1], z = q[2], e1x = q[3], e1y = q[4], e1z = q[5],
+                          e2x = q[6], e2y = q[7], e2z = q[8];
+                    /* the triangle's box: v0 + min(0, e1, e2) is the least
+                     * of v0, v0 + e1, v0 + e2 as rounded (rounding is
+                     * monotonic) */
+                    float lx = e1x < e2x ? e1x : e2x, hx = e1x < e2x ? e2x : e1x;
+                    float ly = e1y < e2y ? e1y : e2y, hy = e1y < e2y ? e2y : e1y;
+                    float lz = e1z < e2z ? e1z : e2z, hz = e1z < e2z ? e2z : e1z;
+                    lx = lx < 0.0f ? lx : 0.0f;
+                    ly = ly < 0.0f ? ly : 0.0f;
+                    lz = lz < 0.0f ? lz : 0.0f;
+                    hx = hx > 0.0f ? hx : 0.0f;
+                    hy = hy > 0.0f ? hy : 0.0f;
+                    hz = hz > 0.0f ? hz : 0.0f;
+                    if (x + lx > bh[0] || x + hx < bl[0] || y + ly > bh[1] || y + hy < bl[1] ||
+                        z + lz > bh[2] || z + hz < bl[2])
+                        continue;
+                    *tests -= as_uint16(m);
+                    rt_intersect16_core((int16)(int)tri, m, P, limit, (float16)x, (float16)y,
+                                        (float16)z, (float16)e1x, (float16)e1y, (float16)e1z,
+                                        (float16)e2x, (float16)e2y, (float16)e2z);
+                }
+            }
+        if (tested) {
+            float16 tout = fmin(t1, tkout);
+            int16 done = alive & (((P->tri != -1) & ((P->any_hit != 0) |
+                                                     (P->t <= rt_voxel_limit16(tout, P->tmax)))) |
+                                  (tout >= t1));
+            last = select(last, (int16)s, done);
+            alive &= ~done;
+            if (!rt_any16(alive))
+                break;
+        }
+    }
+    *steps += as_uint16(select((int16)0, as_int16(abs_diff(last, cK)) + 1, active));
+    return 1;
+}
+#endif /* RT_FUSED_SLICES */
 
 /* Traces rays [first, first + count) (count <= 16) as one packet and writes
  * their hits. Adds the voxels and tests to *steps_sum and *tests_sum. */
@@ -107,6 +349,11 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
     int16 sz = select((int16)(-1), (int16)1, P.dz > 0.0f);
     int nx = g->dims[0], ny = g->dims[1], nz = g->dims[2];
     uint16 steps = (uint16)0u, tests = (uint16)0u;
+#ifdef RT_FUSED_SLICES
+    if (rt_trace_slices(g, &P, t0, t1, active, cx, cy, cz, cell_start, cell_tris, tv, &steps,
+                        &tests))
+        active = (int16)0; /* done; else the walk below takes the packet */
+#endif
 #ifdef RT_FUSED_WALK
     /* Walk ahead (sparse grids): each round first steps every lane through
      * RT_FUSED_WALK voxels, reading their list bounds as it goes, then runs
