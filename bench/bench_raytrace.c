@@ -43,7 +43,7 @@
  *
  *   bench_raytrace [--size N] [--reps R] [--scene NAME]... [--out FILE]
  *                  [--purcell-size N] [--skip-purcell] [--quick]
- *                  [--embree-isa ISA] [--grid-min-dim N]
+ *                  [--embree-isa ISA] [--grid-min-dim N] [--fused-walk W]
  *
  * Embree picks its code path at run time; when the kernels were built for
  * AVX2 on an AVX-512 machine (POCL_KERNELLIB_NAME=avx2), Embree is held to
@@ -88,6 +88,9 @@ static sluice_context *ctx;
 static char embree_config[64];
 /* --grid-min-dim: 0 for the tracer's automatic resolution */
 static unsigned grid_min_dim;
+/* --fused-walk: how the fused tracer crosses the grid (tracer.h) */
+static rt_fused_walk fused_walk = RT_WALK_AUTO;
+static const char *const walk_names[] = {"auto", "voxel", "walk", "slices"};
 
 #define TRY(call)                                                                                  \
     do {                                                                                           \
@@ -565,6 +568,7 @@ typedef struct scene_result {
     uint32_t dims[3];
     size_t grid_entries;
     double grid_host_s, grid_device_s, tracer_create_s[2];
+    char fused_path[192]; /* rt_tracer_fused_path */
     int embree;
     double emb_build_s;
     set_result primary, bounce;
@@ -644,6 +648,7 @@ static rt_tracer *make_tracer(const sr_scene *sc, rt_exec exec, unsigned min_dim
         o.unroll_tests = unroll;
     }
     o.grid_min_dim = min_dim;
+    o.fused_walk = fused_walk;
     rt_tracer *t = NULL;
     double t0 = sr_clock_seconds();
     if (rt_tracer_create(ctx, sc, &o, &t, err, sizeof err) != SLUICE_OK) {
@@ -815,6 +820,7 @@ static int run_scene(const char *name, unsigned size, unsigned reps, scene_resul
     memset(&pe, 0, sizeof pe);
     pe.w = pe.h = size;
     pe.tf = make_tracer(sc, RT_EXEC_FUSED, grid_min_dim, 0, &res->tracer_create_s[0]);
+    snprintf(res->fused_path, sizeof res->fused_path, "%s", rt_tracer_fused_path(pe.tf));
     unsigned min_dim = rt_tracer_grid_min_dim(pe.tf);
     res->min_dim = min_dim;
     rt_grid_desc desc;
@@ -995,7 +1001,7 @@ static void usage(FILE *f)
 {
     fprintf(f, "usage: " PROG " [--size N] [--reps R] [--scene NAME]... [--out FILE]\n"
                "                      [--purcell-size N] [--skip-purcell] [--quick]\n"
-               "                      [--embree-isa ISA] [--grid-min-dim N]\n"
+               "                      [--embree-isa ISA] [--grid-min-dim N] [--fused-walk W]\n"
                "  --size N          image side for the rays/s comparison (default 512)\n"
                "  --reps R          timed rounds, each running every peer for 8 frames;\n"
                "                    the best frame of each peer is kept (default 10)\n"
@@ -1010,7 +1016,10 @@ static void usage(FILE *f)
                "                    (default: avx2 when the kernels were built for AVX2,\n"
                "                    as with POCL_KERNELLIB_NAME=avx2, else native)\n"
                "  --grid-min-dim N  voxels along the grid's shortest axis, 1 .. 1024 (default:\n"
-               "                    the tracer's automatic resolution per scene)\n");
+               "                    the tracer's automatic resolution per scene)\n"
+               "  --fused-walk W    how `fused` crosses the grid: auto (default), voxel (a\n"
+               "                    voxel at a time), walk (walk ahead) or slices (coherent\n"
+               "                    packets slice by slice, the others walking ahead)\n");
 }
 
 static double rate(size_t n, double s)
@@ -1161,8 +1170,19 @@ int main(int argc, char **argv)
         else if (strcmp(argv[i], "--grid-min-dim") == 0 && i + 1 < argc &&
                  bench_parse_uint(argv[i + 1], 1024, &grid_min_dim) && grid_min_dim > 0)
             ++i;
-        else if (strcmp(argv[i], "--embree-isa") == 0 && i + 1 < argc &&
-                 embree_isa_known(argv[i + 1]))
+        else if (strcmp(argv[i], "--fused-walk") == 0 && i + 1 < argc) {
+            unsigned k = 0;
+            while (k < 4 && strcmp(argv[i + 1], walk_names[k]) != 0)
+                ++k;
+            if (k == 4) {
+                fprintf(stderr, PROG ": --fused-walk: unknown \"%s\" (auto, voxel, walk, slices)\n",
+                        argv[i + 1]);
+                return 2;
+            }
+            fused_walk = (rt_fused_walk)k;
+            ++i;
+        } else if (strcmp(argv[i], "--embree-isa") == 0 && i + 1 < argc &&
+                   embree_isa_known(argv[i + 1]))
             embree_isa = argv[++i];
         else if (strcmp(argv[i], "--quick") == 0) {
             quick = 1;
@@ -1242,7 +1262,7 @@ int main(int argc, char **argv)
         embree_detail(r, &r->primary);
         if (r->embree)
             printf("; Embree BVH %.4f s", r->emb_build_s);
-        printf("\n");
+        printf("\n%-11s fused traversal: %s\n", "", r->fused_path);
     }
 
     printf("\ndiffuse bounce rays, one per pixel whose primary ray hit (cosine-weighted about the "
@@ -1319,23 +1339,25 @@ int main(int argc, char **argv)
                 "  \"device\": {\"platform\": \"%s\", \"name\": \"%s\", \"compute_units\": %u, "
                 "\"opencl_c\": \"%s\"},\n",
                 info.platform, info.name, info.compute_units, info.version);
-        fprintf(f,
-                "  \"setup\": {\"width\": %u, \"height\": %u, \"rays_per_pixel\": 1, \"rays\": "
-                "\"primary, through the pixel centres, the scene's camera, 8x8-tile order\", "
-                "\"bounce_rays\": \"diffuse bounce: one per pixel whose primary ray hit (the C "
-                "tracer's hits), from the hit point offset by scene_eps (sr_scene_epsilon) along "
-                "the geometric normal facing the ray, cosine-weighted about it from a hash of the "
-                "pixel (seed 0x%x), tmin 0, tmax infinity, path-ray flags; primary order, "
-                "compacted; Embree: other pixels inactive, INCOHERENT context\", "
-                "\"reps\": %u, \"timing\": \"interleaved rounds, each timing every peer for %u "
-                "frames back to back; the best frame of reps rounds after a warm-up round; "
-                "Sluice: trace only, "
-                "rays and hits in device streams\", \"grid_min_dim\": \"%s\", \"quick\": %s},\n",
-                size, size, BOUNCE_SEED, reps, BENCH_BURST,
-                grid_min_dim ? "--grid-min-dim (each scene's grid.min_dim)"
-                             : "auto: the ray tracer's choice per scene (rt_tracer_grid_min_dim; "
-                               "the sparse density, else the dense one)",
-                quick ? "true" : "false");
+        fprintf(
+            f,
+            "  \"setup\": {\"width\": %u, \"height\": %u, \"rays_per_pixel\": 1, \"rays\": "
+            "\"primary, through the pixel centres, the scene's camera, 8x8-tile order\", "
+            "\"bounce_rays\": \"diffuse bounce: one per pixel whose primary ray hit (the C "
+            "tracer's hits), from the hit point offset by scene_eps (sr_scene_epsilon) along "
+            "the geometric normal facing the ray, cosine-weighted about it from a hash of the "
+            "pixel (seed 0x%x), tmin 0, tmax infinity, path-ray flags; primary order, "
+            "compacted; Embree: other pixels inactive, INCOHERENT context\", "
+            "\"reps\": %u, \"timing\": \"interleaved rounds, each timing every peer for %u "
+            "frames back to back; the best frame of reps rounds after a warm-up round; "
+            "Sluice: trace only, "
+            "rays and hits in device streams\", \"grid_min_dim\": \"%s\", \"fused_walk\": \"%s\", "
+            "\"quick\": %s},\n",
+            size, size, BOUNCE_SEED, reps, BENCH_BURST,
+            grid_min_dim ? "--grid-min-dim (each scene's grid.min_dim)"
+                         : "auto: the ray tracer's choice per scene (rt_tracer_grid_min_dim; "
+                           "the sparse density, else the dense one)",
+            walk_names[fused_walk], quick ? "true" : "false");
 #ifdef HAVE_EMBREE
         fprintf(f,
                 "  \"embree\": {\"available\": true, \"version\": \"%s\", \"build_quality\": "
@@ -1361,9 +1383,9 @@ int main(int argc, char **argv)
                     "     \"grid\": {\"min_dim\": %u, \"dims\": [%u, %u, %u], \"entries\": %zu, "
                     "\"build_seconds_c\": %.6f, \"build_seconds_device\": %.6f, "
                     "\"tracer_create_seconds_fused\": %.6f, "
-                    "\"tracer_create_seconds_stream\": %.6f},\n",
+                    "\"tracer_create_seconds_stream\": %.6f},\n     \"fused_path\": \"%s\",\n",
                     r->min_dim, r->dims[0], r->dims[1], r->dims[2], r->grid_entries, r->grid_host_s,
-                    r->grid_device_s, r->tracer_create_s[0], r->tracer_create_s[1]);
+                    r->grid_device_s, r->tracer_create_s[0], r->tracer_create_s[1], r->fused_path);
             json_set(f, "     ", r, &r->primary, r->emb_build_s);
             fprintf(f, ",\n     \"bounce\": {\"rays\": %zu, \"hit_fraction\": %.6f", r->bounce.rays,
                     r->bounce.hit_fraction);
