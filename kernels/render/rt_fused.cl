@@ -102,10 +102,11 @@ inline float2 rt_frange16(float16 x, int16 m)
 #endif
 
 /* Floor of x clamped to [0, n - 1] (truncation is floor from 0 up; the
- * library floor expanded to a dozen instructions). */
+ * library floor expanded to a dozen instructions). Past n - 1 the clamp
+ * comes first: a float beyond INT_MAX has no int. */
 inline int rt_cell_floor(float x, int n)
 {
-    return x <= 0.0f ? 0 : min((int)x, n - 1);
+    return x <= 0.0f ? 0 : (x >= (float)(n - 1) ? n - 1 : (int)x);
 }
 
 /* Coherent packets, slice by slice: the coherent grid traversal of Wald,
@@ -177,7 +178,7 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
     int s0 = sgn > 0 ? kr.x : kr.y, s1 = sgn > 0 ? er.y : er.x;
     int ns = (s1 - s0) * sgn + 1;
     if (ns <= 0)
-        return 1;
+        return 0; /* no slice (only with NaN): the walk decides */
     /* Each ray's U and V (in voxels) are linear in the position of a K
      * plane, so their least over the rays is concave in it and their
      * greatest convex: the chords between the first and the last plane
