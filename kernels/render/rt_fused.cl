@@ -71,19 +71,10 @@ inline void rt_trace_one(const rt_grid_args *g, global const uint *cell_start,
 #define RT_PACKET 16
 
 #ifdef RT_FUSED_SLICES
-/* The smallest of lo and the largest of hi over the lanes of m. */
-inline int2 rt_range16(int16 lo, int16 hi, int16 m)
-{
-    int16 a = select((int16)INT_MAX, lo, m), b = select((int16)INT_MIN, hi, m);
-    int8 a8 = min(a.lo, a.hi), b8 = max(b.lo, b.hi);
-    int4 a4 = min(a8.lo, a8.hi), b4 = max(b8.lo, b8.hi);
-    int2 a2 = min(a4.lo, a4.hi), b2 = max(b4.lo, b4.hi);
-    return (int2)(min(a2.x, a2.y), max(b2.x, b2.y));
-}
-
-/* The same for floats (one set of lanes for both). Scalar fmin and fmax
- * became library calls in PoCL's code: compares instead. */
-inline float2 rt_frange16(float16 x, int16 m)
+/* The smallest and the largest of x over the lanes of m (rt_minmax16 for
+ * floats). The last step compares: scalar fmin and fmax became library
+ * calls in PoCL's code. */
+inline float2 rt_fminmax16(float16 x, int16 m)
 {
     float16 a = select((float16)INFINITY, x, m), b = select((float16)(-INFINITY), x, m);
     float8 a8 = fmin(a.lo, a.hi), b8 = fmax(b.lo, b.hi);
@@ -174,7 +165,7 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
     float loV = g->lo[V], cellV = g->cell[V], invV = g->inv_cell[V];
     /* the slices from the first ray's entry to the last one's exit */
     int16 eK = clamp(convert_int16(floor((oK + dK * t1 - loK) * invK)), 0, nK - 1);
-    int2 kr = rt_range16(cK, cK, active), er = rt_range16(eK, eK, active);
+    int2 kr = rt_minmax16(cK, active), er = rt_minmax16(eK, active);
     int s0 = sgn > 0 ? kr.x : kr.y, s1 = sgn > 0 ? er.y : er.x;
     int ns = (s1 - s0) * sgn + 1;
     if (ns <= 0)
@@ -186,10 +177,10 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
     float pa = loK + (float)(s0 + (sgn < 0)) * cellK;
     float pb = loK + (float)(s1 + (sgn > 0)) * cellK;
     float16 ta = (pa - oK) * iK, tb = (pb - oK) * iK;
-    float2 ua = rt_frange16((oU + dU * ta - loU) * invU, active);
-    float2 ub = rt_frange16((oU + dU * tb - loU) * invU, active);
-    float2 va = rt_frange16((oV + dV * ta - loV) * invV, active);
-    float2 vb = rt_frange16((oV + dV * tb - loV) * invV, active);
+    float2 ua = rt_fminmax16((oU + dU * ta - loU) * invU, active);
+    float2 ub = rt_fminmax16((oU + dU * tb - loU) * invU, active);
+    float2 va = rt_fminmax16((oV + dV * ta - loV) * invV, active);
+    float2 vb = rt_fminmax16((oV + dV * tb - loV) * invV, active);
     if (!((ua.y - ua.x + 1.0f) * (va.y - va.x + 1.0f) <= RT_SLICE_AREA &&
           (ub.y - ub.x + 1.0f) * (vb.y - vb.x + 1.0f) <= RT_SLICE_AREA))
         return 0;
