@@ -87,7 +87,8 @@ inline float2 rt_fminmax16(float16 x, int16 m)
 #define RT_PICK3_(k, a, b, c) ((k) == 0 ? (a) : ((k) == 1 ? (b) : (c)))
 
 /* The widest footprint, in voxels of one slice, for which a packet goes
- * slice by slice (bench_raytrace's eye rays stay under 3 on the bunny). */
+ * slice by slice: wider than any eye packet's measured (bench/README.md),
+ * narrower than most bounce packets'. */
 #ifndef RT_SLICE_AREA
 #define RT_SLICE_AREA 6.0f
 #endif
@@ -107,14 +108,13 @@ inline int rt_cell_floor(float x, int n)
  * of voxels (one K index) at a time. The rays' extent across a slice is
  * known from two reductions made once per packet (below), so the empty
  * voxels of a slice cost one scalar read of their list bounds each, where
- * the walk ahead gathers them lane by lane and steps every lane with about
- * 80 vector instructions. A voxel that holds triangles is tested by the
+ * the walk ahead gathers them lane by lane and steps every lane with a few
+ * dozen vector instructions. A voxel that holds triangles is tested by the
  * lanes whose rays cross it (a slab test), its triangles broadcast, each
  * first checked against the part of the voxel the packet's rays cross in
  * the slice (its box, from its v0, e1, e2): a triangle with no point there
  * has no hit there, and its hits elsewhere are found in the voxels that hold
- * them. On bench_raytrace's bunny-close eye rays this culled three of four
- * broadcast tests.
+ * them (bench/README.md has what the cull saves).
  *
  * A lane stops after the slice where its nearest hit so far lies within the
  * slice (so no voxel further on can hold a nearer one), as a ray of
