@@ -237,6 +237,10 @@ static rt_tracer *make_tracer(const sr_scene *s, rt_exec exec, rt_intersector is
 
 static size_t total_rays_checked;
 
+/* Slices the coherent bundles' packets crossed at once through empty macro
+ * cells, over every scene (some have none). */
+static uint64_t packet_slices_skipped;
+
 /* Traces `rays` in both modes and compares with the brute force on the first
  * `nbf` of them (all when nbf == n). */
 static void check_against_bf(const char *name, const sr_scene *s, rt_ray *rays, size_t n,
@@ -308,6 +312,16 @@ static void check_against_bf(const char *name, const sr_scene *s, rt_ray *rays, 
                        (double)steps_dda / (double)n);
                 CHECK(!coherent || counted_apart > 0, "%s: the slices never ran", what);
                 CHECK(steps_here <= steps_dda, "%s: more slices than voxels", what);
+                /* packets count their slices, and those crossed at once
+                 * through empty macro cells are among them */
+                const rt_trace_stats *st = rt_tracer_stats(t);
+                printf("%-28s %llu packet slices, %llu of them through empty blocks\n", what,
+                       (unsigned long long)st->slices, (unsigned long long)st->slices_skipped);
+                CHECK(!coherent || st->slices > 0, "%s: no packet slices counted", what);
+                CHECK(st->slices_skipped <= st->slices, "%s: more slices skipped than crossed",
+                      what);
+                if (coherent)
+                    packet_slices_skipped += st->slices_skipped;
             }
             CHECK(diff == 0, "%s: stream and %s differ on %zu of %zu rays", name, paths[e].name,
                   diff, n);
@@ -322,6 +336,7 @@ static void check_against_bf(const char *name, const sr_scene *s, rt_ray *rays, 
 
 static void test_random_rays(void)
 {
+    packet_slices_skipped = 0;
     struct {
         const char *name;
         size_t n, nbf;
@@ -354,6 +369,7 @@ static void test_random_rays(void)
         free(r);
         sr_scene_destroy(s);
     }
+    CHECK(packet_slices_skipped > 0, "no coherent packet crossed an empty macro cell");
 }
 
 /* ------------------------------------------------------------------ */

@@ -55,6 +55,11 @@ void rt_stats_print(const rt_stats_report *r, sluice_context *ctx, FILE *out)
             (r->tracer_stream_bytes + r->render->stream_bytes) / 1048576.0);
     if (r->fused_path && r->fused_path[0])
         fprintf(out, "fused traversal: %s\n", r->fused_path);
+    if (t->slices)
+        fprintf(out,
+                "coherent packets: %llu slices crossed, %.1f%% of them skipped at once through "
+                "empty 4x4x4 voxel blocks\n",
+                (unsigned long long)t->slices, 100.0 * per(t->slices_skipped, t->slices));
     fprintf(out, "skipped: %s\n", r->skipped && r->skipped[0] ? r->skipped : "nothing");
     if (r->sampling)
         sr_adaptive_print(r->sampling, out);
@@ -112,6 +117,8 @@ sluice_status rt_stats_write_json(const rt_stats_report *r, sluice_context *ctx,
             (unsigned long long)r->render->nonfinite, r->bad_pixels);
     fprintf(f, "  \"fused_traversal\": ");
     sr_json_string(f, r->fused_path ? r->fused_path : "");
+    fprintf(f, ",\n  \"packet_slices\": %llu,\n  \"packet_slices_skipped\": %llu",
+            (unsigned long long)t->slices, (unsigned long long)t->slices_skipped);
     fprintf(f, ",\n  \"skipped\": ");
     sr_json_string(f, r->skipped);
     fprintf(f, ",\n");

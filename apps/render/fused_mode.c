@@ -24,6 +24,9 @@ sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 7, t->list_records ? t->list_records : t->ds->tri_records,
                                       0);
+    if (st == SLUICE_OK) /* any stream where the kernel reads no macro cells */
+        st =
+            sluice_kernel_set_stream(k, 8, t->macro_cells ? t->macro_cells : t->grid.cell_start, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(k);
     uint32_t c[RT_CTR_TRACE_COUNT];
@@ -34,6 +37,8 @@ sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice
     (void)n;
     t->stats.voxels += c[RT_CTR_VOXELS];
     t->stats.tests += c[RT_CTR_TESTS];
+    t->stats.slices += c[RT_CTR_SLICES];
+    t->stats.slices_skipped += c[RT_CTR_SLICES_SKIPPED];
     t->stats.passes += 1;
     return SLUICE_OK;
 }

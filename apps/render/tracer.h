@@ -114,6 +114,11 @@ typedef struct rt_trace_stats {
     uint64_t calls;           /**< trace calls (ray streams traced) */
     double live_fraction_sum; /**< stream mode: sum over passes of the share of
                                    live rays the pass processed */
+    uint64_t slices;          /**< fused mode, coherent packets slice by slice
+                                   (RT_WALK_SLICES): slices the packets crossed,
+                                   counted per packet, not per ray */
+    uint64_t slices_skipped;  /**< of those, slices crossed in one step through
+                                   blocks of 4x4x4 voxels with no triangles */
     uint32_t max_steps;       /**< most voxels one ray visited */
     uint32_t max_tests;       /**< most triangle tests one ray did */
     double seconds;           /**< host wall time spent tracing */

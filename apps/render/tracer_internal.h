@@ -8,7 +8,14 @@
 #include "tracer.h"
 
 /* Counters of the trace kernels (rt_stream.cl, rt_fused.cl). */
-enum { RT_CTR_VOXELS = 0, RT_CTR_TESTS = 1, RT_CTR_DONE = 2, RT_CTR_TRACE_COUNT = 3 };
+enum {
+    RT_CTR_VOXELS = 0,
+    RT_CTR_TESTS = 1,
+    RT_CTR_DONE = 2,
+    RT_CTR_SLICES = 3,         /* fused, slice by slice: slices packets crossed */
+    RT_CTR_SLICES_SKIPPED = 4, /* of those, crossed through empty macro cells */
+    RT_CTR_TRACE_COUNT = 5
+};
 
 struct rt_tracer {
     sluice_context *ctx;
@@ -27,7 +34,8 @@ struct rt_tracer {
     /* fused mode walking ahead (rt_fused.cl): the list-order copy of the
      * triangle records (NULL when the walk gathers instead) */
     int walks_ahead;
-    int slices; /* coherent packets slice by slice (RT_FUSED_SLICES) */
+    int slices;                 /* coherent packets slice by slice (RT_FUSED_SLICES) */
+    sluice_stream *macro_cells; /* uchar per block of voxels (rt_macro_cells) */
     sluice_stream *list_records;
     size_t list_stride; /* floats per plane of list_records */
     char fused_path[192];

@@ -4,7 +4,9 @@
  * MIMD form Purcell contrasts with the multipass form (thesis 4.1.2 and 5.2.2,
  * "branching"). It runs exactly the functions of rt_trace.cl, in the same
  * order as the stream mode's passes, so both find the same hits.
- * Counters: 0 voxels visited, 1 triangle tests, 2 rays finished.
+ * Counters: 0 voxels visited, 1 triangle tests, 2 rays finished; with
+ * coherent packets slice by slice, 3 the slices they crossed and 4 those
+ * crossed through empty macro cells (per packet, not per ray).
  */
 
 /* Traces one ray to its nearest hit (or, for a shadow ray, to any hit before
@@ -101,6 +103,60 @@ inline int rt_cell_floor(float x, int n)
     return x <= 0.0f ? 0 : (x >= (float)(n - 1) ? n - 1 : (int)x);
 }
 
+/* Whether a triangle (v0, e1, e2) may have a point in the box [bl, bh]: its
+ * own box, v0 + min(0, e1, e2) .. v0 + max(0, e1, e2), is the least and the
+ * greatest of v0, v0 + e1, v0 + e2 as rounded (rounding is monotonic). One
+ * macro for one triangle and for 16, so both cull alike. */
+#define RT_TRI_IN_BOX_(T, x, y, z, e1x, e1y, e1z, e2x, e2y, e2z, bl, bh)                           \
+    T lx = e1x < e2x ? e1x : e2x, hx = e1x < e2x ? e2x : e1x;                                      \
+    T ly = e1y < e2y ? e1y : e2y, hy = e1y < e2y ? e2y : e1y;                                      \
+    T lz = e1z < e2z ? e1z : e2z, hz = e1z < e2z ? e2z : e1z;                                      \
+    lx = lx < 0.0f ? lx : 0.0f;                                                                    \
+    ly = ly < 0.0f ? ly : 0.0f;                                                                    \
+    lz = lz < 0.0f ? lz : 0.0f;                                                                    \
+    hx = hx > 0.0f ? hx : 0.0f;                                                                    \
+    hy = hy > 0.0f ? hy : 0.0f;                                                                    \
+    hz = hz > 0.0f ? hz : 0.0f;                                                                    \
+    return !(x + lx > bh[0] || x + hx < bl[0] || y + ly > bh[1] || y + hy < bl[1] ||               \
+             z + lz > bh[2] || z + hz < bl[2]);
+
+inline int rt_tri_in_box(float x, float y, float z, float e1x, float e1y, float e1z, float e2x,
+                         float e2y, float e2z, const float *bl, const float *bh)
+{
+    RT_TRI_IN_BOX_(float, x, y, z, e1x, e1y, e1z, e2x, e2y, e2z, bl, bh)
+}
+
+inline int16 rt_tri_in_box16(float16 x, float16 y, float16 z, float16 e1x, float16 e1y, float16 e1z,
+                             float16 e2x, float16 e2y, float16 e2z, const float *bl,
+                             const float *bh)
+{
+    RT_TRI_IN_BOX_(float16, x, y, z, e1x, e1y, e1z, e2x, e2y, e2z, bl, bh)
+}
+
+/* Macro cells: blocks of 2^RT_MACRO_SHIFT voxels a side (the host's
+ * choice, tracer.c), one byte each, set when any of the block's voxels
+ * holds triangles (rt_macro_cells). */
+#ifndef RT_MACRO_SHIFT
+#error "RT_FUSED_SLICES needs RT_MACRO_SHIFT"
+#endif
+
+/* The packet's footprint in voxels (umin, umax, vmin, vmax) between the
+ * planes at fractions f0 and f1 of the way from its first plane to its last,
+ * on the chords (ua, ub), (va, vb); padded by a thousandth of a voxel
+ * against rounding. Each bound is monotonic in f, so a range of slices'
+ * footprint holds each of its slices'. */
+inline float4 rt_slice_footprint(float2 ua, float2 ub, float2 va, float2 vb, float f0, float f1)
+{
+    float a0 = ua.x + (ub.x - ua.x) * f0, a1 = ua.x + (ub.x - ua.x) * f1;
+    float b0 = ua.y + (ub.y - ua.y) * f0, b1 = ua.y + (ub.y - ua.y) * f1;
+    float umin = (a0 < a1 ? a0 : a1) - 1e-3f, umax = (b0 > b1 ? b0 : b1) + 1e-3f;
+    a0 = va.x + (vb.x - va.x) * f0;
+    a1 = va.x + (vb.x - va.x) * f1;
+    b0 = va.y + (vb.y - va.y) * f0;
+    b1 = va.y + (vb.y - va.y) * f1;
+    return (float4)(umin, umax, (a0 < a1 ? a0 : a1) - 1e-3f, (b0 > b1 ? b0 : b1) + 1e-3f);
+}
+
 /* Coherent packets, slice by slice: the coherent grid traversal of Wald,
  * Ize, Kensler, Knoll and Parker ("Ray tracing animated scenes using
  * coherent grid traversal", SIGGRAPH 2006). When every ray of the packet
@@ -114,7 +170,10 @@ inline int rt_cell_floor(float x, int n)
  * first checked against the part of the voxel the packet's rays cross in
  * the slice (its box, from its v0, e1, e2): a triangle with no point there
  * has no hit there, and its hits elsewhere are found in the voxels that hold
- * them (bench/README.md has what the cull saves).
+ * them. With the list copy the check takes 16 triangles at a time. Where
+ * the footprint over the rest of a block of slices (a macro cell's slab)
+ * falls in empty macro cells, the packet crosses those slices at once
+ * (bench/README.md has what each of these saves).
  *
  * A lane stops after the slice where its nearest hit so far lies within the
  * slice (so no voxel further on can hold a nearer one), as a ray of
@@ -130,7 +189,8 @@ inline int rt_cell_floor(float x, int n)
 inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, float16 t1,
                            int16 active, int16 cx, int16 cy, int16 cz,
                            global const uint *cell_start, global const uint *cell_tris,
-                           global const float *tv, uint16 *steps, uint16 *tests)
+                           global const float *tv, global const float *lists,
+                           global const uchar *macro, uint16 *steps, uint16 *tests, uint *slices)
 {
     ushort am = sluice_mask16(active);
     if (!am)
@@ -189,121 +249,175 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
     int16 nzU = dU != 0.0f, nzV = dV != 0.0f;
     float16 inf = (float16)INFINITY;
     float inv_ns = 1.0f / (float)ns;
+#ifdef RT_LIST_COPY
+    int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+#else
+    (void)lists;
+#endif
+    /* strides of the voxels and of the macro cells along K, U and V */
+    int stride[3] = {1, g->dims[0], g->dims[0] * g->dims[1]};
+    uint sK = (uint)stride[K], sU = (uint)stride[U], sV = (uint)stride[V];
+    int mx = (g->dims[0] + (1 << RT_MACRO_SHIFT) - 1) >> RT_MACRO_SHIFT;
+    stride[1] = mx;
+    stride[2] = mx * ((g->dims[1] + (1 << RT_MACRO_SHIFT) - 1) >> RT_MACRO_SHIFT);
+    uint mK = (uint)stride[K], mU = (uint)stride[U], mV = (uint)stride[V];
     int16 alive = active, last = eK; /* last: the slice where a lane stopped */
-    for (int k = 0; k < ns; ++k) {
-        int s = s0 + sgn * k;
-        float f0 = (float)k * inv_ns, f1 = (float)(k + 1) * inv_ns;
-        /* the footprint on the slice's two planes, padded by a thousandth of
-         * a voxel against rounding */
-        float a0 = ua.x + (ub.x - ua.x) * f0, a1 = ua.x + (ub.x - ua.x) * f1;
-        float b0 = ua.y + (ub.y - ua.y) * f0, b1 = ua.y + (ub.y - ua.y) * f1;
-        float umin = (a0 < a1 ? a0 : a1) - 1e-3f, umax = (b0 > b1 ? b0 : b1) + 1e-3f;
-        a0 = va.x + (vb.x - va.x) * f0;
-        a1 = va.x + (vb.x - va.x) * f1;
-        b0 = va.y + (vb.y - va.y) * f0;
-        b1 = va.y + (vb.y - va.y) * f1;
-        float vmin = (a0 < a1 ? a0 : a1) - 1e-3f, vmax = (b0 > b1 ? b0 : b1) + 1e-3f;
-        int u0 = rt_cell_floor(umin, nU), u1 = rt_cell_floor(umax, nU);
-        int v0 = rt_cell_floor(vmin, nV), v1 = rt_cell_floor(vmax, nV);
-        int tested = 0;
-        float16 tkin = (float16)0.0f, tkout = (float16)0.0f;
-        for (int v = v0; v <= v1; ++v)
-            for (int u = u0; u <= u1; ++u) {
-                int c[3];
-                c[K] = s;
-                c[U] = u;
-                c[V] = v;
-                uint ci =
-                    (uint)c[0] + (uint)g->dims[0] * ((uint)c[1] + (uint)g->dims[1] * (uint)c[2]);
-                uint a = cell_start[ci], b = cell_start[ci + 1u];
-                if (a >= b)
-                    continue;
-                /* the lanes whose rays cross the voxel, and where they leave
-                 * it: each face's parameter as rt_voxel_exit computes it */
-                if (!tested) {
-                    tkin = (loK + (float)(s + (sgn < 0)) * cellK - oK) * iK;
-                    tkout = (loK + (float)(s + (sgn > 0)) * cellK - oK) * iK;
-                }
-                float16 fa = (loU + (float)u * cellU - oU) * iU;
-                float16 fb = (loU + (float)(u + 1) * cellU - oU) * iU;
-                float16 tn = fmax(tkin, select(-inf, fmin(fa, fb), nzU));
-                float16 te = fmin(tkout, select(inf, fmax(fa, fb), nzU));
-                fa = (loV + (float)v * cellV - oV) * iV;
-                fb = (loV + (float)(v + 1) * cellV - oV) * iV;
-                tn = fmax(tn, select(-inf, fmin(fa, fb), nzV));
-                te = fmin(te, select(inf, fmax(fa, fb), nzV));
-                int16 m = alive & (tn <= te + fabs(te) * 1e-5f) & (te >= t0) & (tn <= t1);
-                if (!rt_any16(m))
-                    continue;
-                tested = 1;
-                float16 limit = select(rt_voxel_limit16(te, P->tmax), P->tmax, P->any_hit);
-                /* the box the packet's rays cross in this voxel, padded */
-                float bl[3], bh[3];
-                for (int j = 0; j < 3; ++j) {
-                    bl[j] = g->lo[j] + (float)c[j] * g->cell[j];
-                    bh[j] = bl[j] + g->cell[j];
-                }
-                float w = loU + umin * cellU;
-                bl[U] = w > bl[U] ? w : bl[U];
-                w = loU + umax * cellU;
-                bh[U] = w < bh[U] ? w : bh[U];
-                w = loV + vmin * cellV;
-                bl[V] = w > bl[V] ? w : bl[V];
-                w = loV + vmax * cellV;
-                bh[V] = w < bh[V] ? w : bh[V];
-                for (int j = 0; j < 3; ++j) {
-                    bl[j] -= 1e-3f * g->cell[j];
-                    bh[j] += 1e-3f * g->cell[j];
-                }
-                for (uint j = a; j < b; ++j) {
-                    uint tri = cell_tris[j];
-                    global const float *q = tv + 9u * (size_t)tri;
-                    float x = q[0], y = q[1], z = q[2], e1x = q[3], e1y = q[4], e1z = q[5],
-                          e2x = q[6], e2y = q[7], e2z = q[8];
-                    /* the triangle's box: v0 + min(0, e1, e2) is the least
-                     * of v0, v0 + e1, v0 + e2 as rounded (rounding is
-                     * monotonic) */
-                    float lx = e1x < e2x ? e1x : e2x, hx = e1x < e2x ? e2x : e1x;
-                    float ly = e1y < e2y ? e1y : e2y, hy = e1y < e2y ? e2y : e1y;
-                    float lz = e1z < e2z ? e1z : e2z, hz = e1z < e2z ? e2z : e1z;
-                    lx = lx < 0.0f ? lx : 0.0f;
-                    ly = ly < 0.0f ? ly : 0.0f;
-                    lz = lz < 0.0f ? lz : 0.0f;
-                    hx = hx > 0.0f ? hx : 0.0f;
-                    hy = hy > 0.0f ? hy : 0.0f;
-                    hz = hz > 0.0f ? hz : 0.0f;
-                    if (x + lx > bh[0] || x + hx < bl[0] || y + ly > bh[1] || y + hy < bl[1] ||
-                        z + lz > bh[2] || z + hz < bl[2])
+    int k = 0;
+    while (k < ns) {
+        /* the slices left in this macro cell's slab, in one step when the
+         * footprint over them holds no triangles */
+        int s = s0 + sgn * k, ms = s >> RT_MACRO_SHIFT;
+        int n = sgn > 0 ? ((ms + 1) << RT_MACRO_SHIFT) - s : s - (ms << RT_MACRO_SHIFT) + 1;
+        n = n < ns - k ? n : ns - k;
+        float4 fp = rt_slice_footprint(ua, ub, va, vb, (float)k * inv_ns, (float)(k + n) * inv_ns);
+        int mu0 = rt_cell_floor(fp.x, nU) >> RT_MACRO_SHIFT;
+        int mu1 = rt_cell_floor(fp.y, nU) >> RT_MACRO_SHIFT;
+        int mv0 = rt_cell_floor(fp.z, nV) >> RT_MACRO_SHIFT;
+        int mv1 = rt_cell_floor(fp.w, nV) >> RT_MACRO_SHIFT;
+        uint full = 0u;
+        for (int v = mv0; v <= mv1; ++v)
+            for (int u = mu0; u <= mu1; ++u)
+                full |= macro[(uint)ms * mK + (uint)u * mU + (uint)v * mV];
+        if (!full) {
+            slices[1] += (uint)n;
+            k += n;
+            continue;
+        }
+        int kend = k + n, stop = 0;
+        for (; k < kend; ++k) {
+            s = s0 + sgn * k;
+            fp = rt_slice_footprint(ua, ub, va, vb, (float)k * inv_ns, (float)(k + 1) * inv_ns);
+            float umin = fp.x, umax = fp.y, vmin = fp.z, vmax = fp.w;
+            int u0 = rt_cell_floor(umin, nU), u1 = rt_cell_floor(umax, nU);
+            int v0 = rt_cell_floor(vmin, nV), v1 = rt_cell_floor(vmax, nV);
+            int tested = 0;
+            float16 tkin = (float16)0.0f, tkout = (float16)0.0f;
+            for (int v = v0; v <= v1; ++v)
+                for (int u = u0; u <= u1; ++u) {
+                    uint ci = (uint)s * sK + (uint)u * sU + (uint)v * sV;
+                    uint a = cell_start[ci], b = cell_start[ci + 1u];
+                    if (a >= b)
                         continue;
-                    *tests -= as_uint16(m);
-                    rt_intersect16_core((int16)(int)tri, m, P, limit, (float16)x, (float16)y,
-                                        (float16)z, (float16)e1x, (float16)e1y, (float16)e1z,
-                                        (float16)e2x, (float16)e2y, (float16)e2z);
+                    /* the lanes whose rays cross the voxel, and where they leave
+                     * it: each face's parameter as rt_voxel_exit computes it */
+                    if (!tested) {
+                        tkin = (loK + (float)(s + (sgn < 0)) * cellK - oK) * iK;
+                        tkout = (loK + (float)(s + (sgn > 0)) * cellK - oK) * iK;
+                    }
+                    float16 fa = (loU + (float)u * cellU - oU) * iU;
+                    float16 fb = (loU + (float)(u + 1) * cellU - oU) * iU;
+                    float16 tn = fmax(tkin, select(-inf, fmin(fa, fb), nzU));
+                    float16 te = fmin(tkout, select(inf, fmax(fa, fb), nzU));
+                    fa = (loV + (float)v * cellV - oV) * iV;
+                    fb = (loV + (float)(v + 1) * cellV - oV) * iV;
+                    tn = fmax(tn, select(-inf, fmin(fa, fb), nzV));
+                    te = fmin(te, select(inf, fmax(fa, fb), nzV));
+                    int16 m = alive & (tn <= te + fabs(te) * 1e-5f) & (te >= t0) & (tn <= t1);
+                    if (!rt_any16(m))
+                        continue;
+                    tested = 1;
+                    float16 limit = select(rt_voxel_limit16(te, P->tmax), P->tmax, P->any_hit);
+                    /* the box the packet's rays cross in this voxel, padded */
+                    int c[3];
+                    c[K] = s;
+                    c[U] = u;
+                    c[V] = v;
+                    float bl[3], bh[3];
+                    for (int j = 0; j < 3; ++j) {
+                        bl[j] = g->lo[j] + (float)c[j] * g->cell[j];
+                        bh[j] = bl[j] + g->cell[j];
+                    }
+                    float w = loU + umin * cellU;
+                    bl[U] = w > bl[U] ? w : bl[U];
+                    w = loU + umax * cellU;
+                    bh[U] = w < bh[U] ? w : bh[U];
+                    w = loV + vmin * cellV;
+                    bl[V] = w > bl[V] ? w : bl[V];
+                    w = loV + vmax * cellV;
+                    bh[V] = w < bh[V] ? w : bh[V];
+                    for (int j = 0; j < 3; ++j) {
+                        bl[j] -= 1e-3f * g->cell[j];
+                        bh[j] += 1e-3f * g->cell[j];
+                    }
+#ifdef RT_LIST_COPY
+                    if (lists) {
+                        /* 16 neighbours of the list copy culled at once: one
+                         * load per plane, where the loop below reads each
+                         * record through cell_tris */
+                        for (uint j = a; j < b; j += 16u) {
+                            global const float *q = lists + j;
+                            uint keep = (uint)sluice_mask16(
+                                (lane < (int)(b - j)) &
+                                rt_tri_in_box16(vload16(0, q), vload16(0, q + RT_LIST_STRIDE),
+                                                vload16(0, q + 2 * RT_LIST_STRIDE),
+                                                vload16(0, q + 3 * RT_LIST_STRIDE),
+                                                vload16(0, q + 4 * RT_LIST_STRIDE),
+                                                vload16(0, q + 5 * RT_LIST_STRIDE),
+                                                vload16(0, q + 6 * RT_LIST_STRIDE),
+                                                vload16(0, q + 7 * RT_LIST_STRIDE),
+                                                vload16(0, q + 8 * RT_LIST_STRIDE), bl, bh));
+                            while (keep) {
+                                global const float *r = q + rt_lowest_bit(keep);
+                                keep &= keep - 1u;
+                                *tests -= as_uint16(m);
+                                rt_intersect16_core(
+                                    (int16)as_int(r[9 * RT_LIST_STRIDE]), m, P, limit,
+                                    (float16)r[0], (float16)r[RT_LIST_STRIDE],
+                                    (float16)r[2 * RT_LIST_STRIDE], (float16)r[3 * RT_LIST_STRIDE],
+                                    (float16)r[4 * RT_LIST_STRIDE], (float16)r[5 * RT_LIST_STRIDE],
+                                    (float16)r[6 * RT_LIST_STRIDE], (float16)r[7 * RT_LIST_STRIDE],
+                                    (float16)r[8 * RT_LIST_STRIDE]);
+                            }
+                        }
+                        continue;
+                    }
+#endif
+                    for (uint j = a; j < b; ++j) {
+                        uint tri = cell_tris[j];
+                        global const float *q = tv + 9u * (size_t)tri;
+                        float x = q[0], y = q[1], z = q[2], e1x = q[3], e1y = q[4], e1z = q[5],
+                              e2x = q[6], e2y = q[7], e2z = q[8];
+                        if (!rt_tri_in_box(x, y, z, e1x, e1y, e1z, e2x, e2y, e2z, bl, bh))
+                            continue;
+                        *tests -= as_uint16(m);
+                        rt_intersect16_core((int16)(int)tri, m, P, limit, (float16)x, (float16)y,
+                                            (float16)z, (float16)e1x, (float16)e1y, (float16)e1z,
+                                            (float16)e2x, (float16)e2y, (float16)e2z);
+                    }
+                }
+            if (tested) {
+                float16 tout = fmin(t1, tkout);
+                int16 done =
+                    alive & (((P->tri != -1) &
+                              ((P->any_hit != 0) | (P->t <= rt_voxel_limit16(tout, P->tmax)))) |
+                             (tout >= t1));
+                last = select(last, (int16)s, done);
+                alive &= ~done;
+                if (!rt_any16(alive)) {
+                    stop = 1;
+                    break;
                 }
             }
-        if (tested) {
-            float16 tout = fmin(t1, tkout);
-            int16 done = alive & (((P->tri != -1) & ((P->any_hit != 0) |
-                                                     (P->t <= rt_voxel_limit16(tout, P->tmax)))) |
-                                  (tout >= t1));
-            last = select(last, (int16)s, done);
-            alive &= ~done;
-            if (!rt_any16(alive))
-                break;
         }
+        if (stop)
+            break;
     }
+    slices[0] += (uint)(k < ns ? k + 1 : ns);
     *steps += as_uint16(select((int16)0, as_int16(abs_diff(last, cK)) + 1, active));
     return 1;
 }
 #endif /* RT_FUSED_SLICES */
 
 /* Traces rays [first, first + count) (count <= 16) as one packet and writes
- * their hits. Adds the voxels and tests to *steps_sum and *tests_sum. */
+ * their hits. Adds the voxels and tests to *steps_sum and *tests_sum, and,
+ * slice by slice, the slices crossed and those crossed through empty macro
+ * cells to slices[0] and slices[1]. */
 inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, uint first,
                             uint count, global rt_hit *hits, global uint *maxima,
                             global const uint *cell_start, global const uint *cell_tris,
-                            global const float *tv, global const float *lists, uint *steps_sum,
-                            uint *tests_sum)
+                            global const float *tv, global const float *lists,
+                            global const uchar *macro, uint *steps_sum, uint *tests_sum,
+                            uint *slices)
 {
     int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     int16 live = lane < (int)count;
@@ -342,9 +456,12 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
     int nx = g->dims[0], ny = g->dims[1], nz = g->dims[2];
     uint16 steps = (uint16)0u, tests = (uint16)0u;
 #ifdef RT_FUSED_SLICES
-    if (rt_trace_slices(g, &P, t0, t1, active, cx, cy, cz, cell_start, cell_tris, tv, &steps,
-                        &tests))
+    if (rt_trace_slices(g, &P, t0, t1, active, cx, cy, cz, cell_start, cell_tris, tv, lists, macro,
+                        &steps, &tests, slices))
         active = (int16)0; /* done; else the walk below takes the packet */
+#else
+    (void)macro;
+    (void)slices;
 #endif
 #ifdef RT_FUSED_WALK
     /* Walk ahead (sparse grids): each round first steps every lane through
@@ -465,20 +582,24 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
 __kernel void rt_trace_fused(SLUICE_PARAMS, global const rt_ray *rays, global rt_hit *hits,
                              global uint *maxima, global const uint *cell_start,
                              global const uint *cell_tris, global const float *tv,
-                             const rt_grid_args g, global const float *lists)
+                             const rt_grid_args g, global const float *lists,
+                             global const uchar *macro)
 {
 #ifdef RT_PACKET
     SLUICE_FOR_EACH_RANGE (b, e) {
-        uint steps = 0u, tests = 0u;
+        uint steps = 0u, tests = 0u, slices[2] = {0u, 0u};
         for (uint p = b; p < e; p += 16u)
             rt_trace_packet(&g, rays, p, min(16u, e - p), hits, maxima, cell_start, cell_tris, tv,
-                            lists, &steps, &tests);
+                            lists, macro, &steps, &tests, slices);
         SLUICE_COUNT(0, steps);
         SLUICE_COUNT(1, tests);
         SLUICE_COUNT(2, e - b);
+        SLUICE_COUNT(3, slices[0]);
+        SLUICE_COUNT(4, slices[1]);
     }
 #else
     (void)lists;
+    (void)macro;
     SLUICE_FOR_EACH (i) {
         rt_rayp r = rt_prepare(&rays[i]);
         rt_best best = rt_no_hit(&r);
@@ -505,6 +626,30 @@ __kernel void rt_list_records(SLUICE_PARAMS, global const uint *cell_tris, globa
         for (uint j = 0; j < 9u; ++j)
             lists[j * RT_LIST_STRIDE + k] = k < entries ? tv[9u * tri + j] : 0.0f;
         lists[9u * RT_LIST_STRIDE + k] = as_float(tri);
+    }
+}
+#endif
+
+#ifdef RT_FUSED_SLICES
+/* The macro cells of rt_trace_slices: byte i is 1 when any voxel of block i
+ * (2^RT_MACRO_SHIFT voxels a side, x fastest) holds triangles. */
+__kernel void rt_macro_cells(SLUICE_PARAMS, global const uint *cell_start, const rt_grid_args g,
+                             global uchar *macro)
+{
+    int m = 1 << RT_MACRO_SHIFT;
+    uint mx = (uint)((g.dims[0] + m - 1) >> RT_MACRO_SHIFT);
+    uint my = (uint)((g.dims[1] + m - 1) >> RT_MACRO_SHIFT);
+    SLUICE_FOR_EACH (i) {
+        int x0 = (int)(i % mx) << RT_MACRO_SHIFT, y0 = (int)(i / mx % my) << RT_MACRO_SHIFT;
+        int z0 = (int)(i / (mx * my)) << RT_MACRO_SHIFT;
+        uint full = 0u;
+        for (int z = z0; z < min(z0 + m, g.dims[2]); ++z)
+            for (int y = y0; y < min(y0 + m, g.dims[1]); ++y)
+                for (int x = x0; x < min(x0 + m, g.dims[0]); ++x) {
+                    uint c = (uint)(x + g.dims[0] * (y + g.dims[1] * z));
+                    full |= cell_start[c] < cell_start[c + 1u];
+                }
+        macro[i] = (uchar)full;
     }
 }
 #endif
