@@ -147,6 +147,11 @@ static rt_ray *coherent_rays(const sr_scene *s, size_t n, uint32_t seed)
         if (l == 0) {
             random_origin(s, &st, o);
             random_centroid(s, &st, c);
+            /* some from far away, where a hit past a voxel's exit (within
+             * its limit, 1e-6 of the distance) is widest */
+            if (b % 8 == 5)
+                for (int k = 0; k < 3; ++k)
+                    o[k] = c[k] + (o[k] - c[k]) * 500.0f;
         }
         float a = 0.01f * ext * ((float)(l % 4) - 1.5f), bb = 0.01f * ext * ((float)(l / 4) - 1.5f);
         if (b % 4 == 3) {

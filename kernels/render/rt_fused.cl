@@ -184,8 +184,9 @@ inline float4 rt_slice_footprint(float2 ua, float2 ub, float2 va, float2 vb, flo
  * triangles tested against it after the cull.
  *
  * Returns 0, having done nothing, when the packet is not coherent: no axis
- * along which all its rays move the same way, or a footprint wider than
- * RT_SLICE_AREA voxels at either end (bounce rays). */
+ * along which all its rays move the same way, two rays moving opposite ways
+ * along either other axis, or a footprint wider than RT_SLICE_AREA voxels at
+ * either end (bounce rays). */
 inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, float16 t1,
                            int16 active, int16 cx, int16 cy, int16 cz,
                            global const uint *cell_start, global const uint *cell_tris,
@@ -212,6 +213,15 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
     if (K < 0)
         return 0;
     int U = K == 2 ? 0 : K + 1, V = U == 2 ? 0 : U + 1;
+    /* Along U and V too, no two rays may move opposite ways: a slice's
+     * voxels are then visited in the order each ray's 3D-DDA enters them
+     * (each step adds 1 to u or to v), so that of two hits at the same t the
+     * same one is kept. */
+    int su = sluice_mask16(active & (dk3[U] < 0.0f)) ? -1 : 1;
+    int sv = sluice_mask16(active & (dk3[V] < 0.0f)) ? -1 : 1;
+    if ((su < 0 && sluice_mask16(active & (dk3[U] > 0.0f))) ||
+        (sv < 0 && sluice_mask16(active & (dk3[V] > 0.0f))))
+        return 0;
     float16 oK = RT_PICK3_(K, P->ox, P->oy, P->oz), dK = RT_PICK3_(K, P->dx, P->dy, P->dz);
     float16 iK = RT_PICK3_(K, P->ix, P->iy, P->iz);
     float16 oU = RT_PICK3_(U, P->ox, P->oy, P->oz), dU = RT_PICK3_(U, P->dx, P->dy, P->dz);
@@ -248,6 +258,13 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
      * already holds that slab */
     int16 nzU = dU != 0.0f, nzV = dV != 0.0f;
     float16 inf = (float16)INFINITY;
+    /* a hit is accepted up to rt_voxel_limit16, past the voxel's exit by at
+     * most 1e-6 of the distance from the origin: at most `reach` (bounded
+     * through |o| + |p| for a point p of the grid, twice over for rounding) */
+    float reach = rt_fminmax16(fabs(P->ox) + fabs(P->oy) + fabs(P->oz), active).y;
+    for (int j = 0; j < 3; ++j)
+        reach += fabs(g->lo[j]) > fabs(g->hi[j]) ? fabs(g->lo[j]) : fabs(g->hi[j]);
+    reach *= 2e-6f;
     float inv_ns = 1.0f / (float)ns;
 #ifdef RT_LIST_COPY
     int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
@@ -292,8 +309,9 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
             int v0 = rt_cell_floor(vmin, nV), v1 = rt_cell_floor(vmax, nV);
             int tested = 0;
             float16 tkin = (float16)0.0f, tkout = (float16)0.0f;
-            for (int v = v0; v <= v1; ++v)
-                for (int u = u0; u <= u1; ++u) {
+            for (int jv = 0; jv <= v1 - v0; ++jv)
+                for (int ju = 0; ju <= u1 - u0; ++ju) {
+                    int u = su > 0 ? u0 + ju : u1 - ju, v = sv > 0 ? v0 + jv : v1 - jv;
                     uint ci = (uint)s * sK + (uint)u * sU + (uint)v * sV;
                     uint a = cell_start[ci], b = cell_start[ci + 1u];
                     if (a >= b)
@@ -317,7 +335,8 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
                         continue;
                     tested = 1;
                     float16 limit = select(rt_voxel_limit16(te, P->tmax), P->tmax, P->any_hit);
-                    /* the box the packet's rays cross in this voxel, padded */
+                    /* the box the packet's rays cross in this voxel, padded
+                     * by a thousandth of a voxel and by `reach` */
                     int c[3];
                     c[K] = s;
                     c[U] = u;
@@ -336,8 +355,8 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
                     w = loV + vmax * cellV;
                     bh[V] = w < bh[V] ? w : bh[V];
                     for (int j = 0; j < 3; ++j) {
-                        bl[j] -= 1e-3f * g->cell[j];
-                        bh[j] += 1e-3f * g->cell[j];
+                        bl[j] -= 1e-3f * g->cell[j] + reach;
+                        bh[j] += 1e-3f * g->cell[j] + reach;
                     }
 #ifdef RT_LIST_COPY
                     if (lists) {
