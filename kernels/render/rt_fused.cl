@@ -379,13 +379,7 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
                                 global const float *r = q + rt_lowest_bit(keep);
                                 keep &= keep - 1u;
                                 *tests -= as_uint16(m);
-                                rt_intersect16_core(
-                                    (int16)as_int(r[9 * RT_LIST_STRIDE]), m, P, limit,
-                                    (float16)r[0], (float16)r[RT_LIST_STRIDE],
-                                    (float16)r[2 * RT_LIST_STRIDE], (float16)r[3 * RT_LIST_STRIDE],
-                                    (float16)r[4 * RT_LIST_STRIDE], (float16)r[5 * RT_LIST_STRIDE],
-                                    (float16)r[6 * RT_LIST_STRIDE], (float16)r[7 * RT_LIST_STRIDE],
-                                    (float16)r[8 * RT_LIST_STRIDE]);
+                                rt_intersect16_copy_one(r, m, P, limit);
                             }
                         }
                         continue;
