@@ -601,9 +601,13 @@ __kernel void rt_trace_fused(SLUICE_PARAMS, global const rt_ray *rays, global rt
 #ifdef RT_PACKET
     SLUICE_FOR_EACH_RANGE (b, e) {
         uint steps = 0u, tests = 0u, slices[2] = {0u, 0u};
-        for (uint p = b; p < e; p += 16u)
+        for (uint p = b; p < e; p += 16u) {
+            /* the next packet's rays, one line each, while this one runs */
+            for (uint q = p + 16u; q < min(p + 32u, e); ++q)
+                SLUICE_PREFETCH(rays + q);
             rt_trace_packet(&g, rays, p, min(16u, e - p), hits, maxima, cell_start, cell_tris, tv,
                             lists, macro, &steps, &tests, slices);
+        }
         SLUICE_COUNT(0, steps);
         SLUICE_COUNT(1, tests);
         SLUICE_COUNT(2, e - b);

@@ -106,6 +106,22 @@ inline int rt_setup_one(const rt_grid_args *g, global const rt_ray *rays, global
     return in;
 }
 
+/* The records of the next block of rays of a pass, ids[from .. from + 16)
+ * (those below `end`): its rays, walk states and, where given, hits, one
+ * line each, while this block runs (SLUICE_PREFETCH). */
+inline void rt_stream_prefetch(global const uint *ids, uint from, uint end,
+                               global const rt_ray *rays, global const rt_walk *walk,
+                               global const rt_hit *hits)
+{
+    for (uint q = from; q < min(from + 16u, end); ++q) {
+        uint id = ids[q];
+        SLUICE_PREFETCH(rays + id);
+        SLUICE_PREFETCH(walk + id);
+        if (hits)
+            SLUICE_PREFETCH(hits + id);
+    }
+}
+
 /* Eye-ray (or any ray) setup: clip to the grid. Every ray's hit record starts
  * as a miss with no work done (rays that miss the grid's box are done at
  * once); the others start at their first voxel and go to traversal. */
@@ -117,6 +133,9 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
             (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
         uint i = lo;
         for (; i + 16u <= hi; i += 16u) {
+            /* the next block's rays, one line each (SLUICE_PREFETCH) */
+            for (uint q = i + 16u; q < min(i + 32u, hi); ++q)
+                SLUICE_PREFETCH(rays + q);
             rt_packet r;
             rt_packet_load(rays, as_int16((uint16)i + lane), (int16)-1, &r);
             /* rt_grid_enter, lane by lane */
@@ -218,6 +237,7 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
             uint16 idv = vload16(0, ids + i);
             uint id[16];
             vstore16(idv, 0, id);
+            rt_stream_prefetch(ids, i + 16u, hi, rays, walk, 0);
             int wc[4][16];
             rt_packet r;
             int16 cx, cy, cz;
@@ -379,6 +399,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
             uint16 idv = vload16(0, ids + i);
             uint id[16];
             vstore16(idv, 0, id);
+            rt_stream_prefetch(ids, i + 16u, hi, rays, walk, hits);
             int wc[4][16];
             rt_packet r;
             int16 cx, cy, cz;
