@@ -142,8 +142,8 @@ static sluice_status build_grid(rt_tracer *t, char *err, size_t err_size)
  * measured best on bunny against 2 and 8 (bench_raytrace). */
 #define RT_WALK_VOXELS 4
 
-/* Blocks of 4x4x4 voxels for the slices' macro cells: 4 was 1.0-1.14x
- * faster than 8 on the bunny views (bench/README.md). */
+/* Blocks of 4x4x4 voxels for the slices' macro cells: faster than 8 on
+ * the bunny views, where finer blocks skip more often (bench/README.md). */
 #define RT_MACRO_SHIFT 2
 
 /* How the fused mode will traverse (tracer.h, rt_fused_walk). Walking ahead
