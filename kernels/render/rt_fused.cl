@@ -139,6 +139,8 @@ inline int16 rt_tri_in_box16(float16 x, float16 y, float16 z, float16 e1x, float
 #ifndef RT_MACRO_SHIFT
 #error "RT_FUSED_SLICES needs RT_MACRO_SHIFT"
 #endif
+/* Macro cells along an axis of n voxels. */
+#define RT_MACRO_DIM_(n) (((n) + (1 << RT_MACRO_SHIFT) - 1) >> RT_MACRO_SHIFT)
 
 /* The packet's footprint in voxels (umin, umax, vmin, vmax) between the
  * planes at fractions f0 and f1 of the way from its first plane to its last,
@@ -272,12 +274,11 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
     (void)lists;
 #endif
     /* strides of the voxels and of the macro cells along K, U and V */
-    int stride[3] = {1, g->dims[0], g->dims[0] * g->dims[1]};
-    uint sK = (uint)stride[K], sU = (uint)stride[U], sV = (uint)stride[V];
-    int mx = (g->dims[0] + (1 << RT_MACRO_SHIFT) - 1) >> RT_MACRO_SHIFT;
-    stride[1] = mx;
-    stride[2] = mx * ((g->dims[1] + (1 << RT_MACRO_SHIFT) - 1) >> RT_MACRO_SHIFT);
-    uint mK = (uint)stride[K], mU = (uint)stride[U], mV = (uint)stride[V];
+    uint vs[3] = {1u, (uint)g->dims[0], (uint)(g->dims[0] * g->dims[1])};
+    uint sK = vs[K], sU = vs[U], sV = vs[V];
+    uint mx = (uint)RT_MACRO_DIM_(g->dims[0]);
+    uint ms3[3] = {1u, mx, mx * (uint)RT_MACRO_DIM_(g->dims[1])};
+    uint mK = ms3[K], mU = ms3[U], mV = ms3[V];
     int16 alive = active, last = eK; /* last: the slice where a lane stopped */
     int k = 0;
     while (k < ns) {
@@ -654,8 +655,7 @@ __kernel void rt_macro_cells(SLUICE_PARAMS, global const uint *cell_start, const
                              global uchar *macro)
 {
     int m = 1 << RT_MACRO_SHIFT;
-    uint mx = (uint)((g.dims[0] + m - 1) >> RT_MACRO_SHIFT);
-    uint my = (uint)((g.dims[1] + m - 1) >> RT_MACRO_SHIFT);
+    uint mx = (uint)RT_MACRO_DIM_(g.dims[0]), my = (uint)RT_MACRO_DIM_(g.dims[1]);
     SLUICE_FOR_EACH (i) {
         int x0 = (int)(i % mx) << RT_MACRO_SHIFT, y0 = (int)(i / mx % my) << RT_MACRO_SHIFT;
         int z0 = (int)(i / (mx * my)) << RT_MACRO_SHIFT;
