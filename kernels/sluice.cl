@@ -612,8 +612,8 @@ inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const 
          ? sluice_L_.n_fixed                                                                       \
          : sluice_stream_length_(sluice_vars_, sluice_L_.in_var, sluice_L_.in_cap))
 
-/* Asks for the cache line holding global address `p` ahead of its use
- * (SLUICE_PREFETCH_W: to be written). A hint: nothing happens where the
+/* Asks for the cache line holding global address `p` ahead of its use. A
+ * hint: nothing happens where the
  * compiler has no prefetch. On CPUs the hardware prefetcher misses gathers
  * and scattered records: a kernel that reads record i + 16 while it works
  * on record i no longer waits on memory for it (the ray tracer's packets,
@@ -622,12 +622,10 @@ inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const 
 #if defined(__has_builtin) && (defined(__x86_64__) || defined(__aarch64__))
 #if __has_builtin(__builtin_prefetch)
 #define SLUICE_PREFETCH(p) __builtin_prefetch((const void *)(ulong)(p), 0)
-#define SLUICE_PREFETCH_W(p) __builtin_prefetch((const void *)(ulong)(p), 1)
 #endif
 #endif
 #ifndef SLUICE_PREFETCH
 #define SLUICE_PREFETCH(p) ((void)0)
-#define SLUICE_PREFETCH_W(p) ((void)0)
 #endif
 
 #endif /* SLUICE_CL_INCLUDED */

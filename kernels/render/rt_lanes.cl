@@ -259,6 +259,20 @@ __attribute__((always_inline)) inline void rt_intersect16_one(global const float
                         (float16)q[8]);
 }
 
+#ifdef RT_LIST_COPY
+/* rt_intersect16_one for the triangle of entry r of the list copy (the
+ * layout of rt_intersect16_turned), broadcast. */
+__attribute__((always_inline)) inline void rt_intersect16_copy_one(global const float *r, int16 m,
+                                                                   rt_packet *P, float16 limit)
+{
+    rt_intersect16_core((int16)as_int(r[9 * RT_LIST_STRIDE]), m, P, limit, (float16)r[0],
+                        (float16)r[RT_LIST_STRIDE], (float16)r[2 * RT_LIST_STRIDE],
+                        (float16)r[3 * RT_LIST_STRIDE], (float16)r[4 * RT_LIST_STRIDE],
+                        (float16)r[5 * RT_LIST_STRIDE], (float16)r[6 * RT_LIST_STRIDE],
+                        (float16)r[7 * RT_LIST_STRIDE], (float16)r[8 * RT_LIST_STRIDE]);
+}
+#endif
+
 /* The records (v0, e1, e2) of triangles tri in the lanes of m, gathered:
  * r[0..2] v0, r[3..5] e1, r[6..8] e2. */
 __attribute__((always_inline)) inline void rt_tri_gather16(global const float *tv, int16 tri,
@@ -301,17 +315,28 @@ inline int16 rt_list_group(int16 m, int16 from, int16 to, uint *start, int2 *spa
 
 /* The lanes of a group (rt_list_group) test their list one triangle at a
  * time, each triangle read once with scalar loads and broadcast to the lanes
- * still inside their range. */
+ * still inside their range. With the list copy (`lists`, the layout of
+ * rt_intersect16_turned) a list's records are neighbours, plane by plane,
+ * where each entry of cell_tris sends the loads to a record of its own. */
 __attribute__((always_inline)) inline void
-rt_intersect16_group(global const float *tv, global const uint *cell_tris, int16 in, uint start,
-                     int2 span, int16 to, rt_packet *P, float16 limit)
+rt_intersect16_group(global const float *tv, global const float *lists,
+                     global const uint *cell_tris, int16 in, uint start, int2 span, int16 to,
+                     rt_packet *P, float16 limit)
 {
     for (uint k = start; k < (uint)span.y; ++k) {
         int16 lm = in;
         if (span.x != span.y)
             lm &= as_uint16(to) > k;
-        rt_intersect16_one(tv, cell_tris[k], lm, P, limit);
+#ifdef RT_LIST_COPY
+        if (lists)
+            rt_intersect16_copy_one(lists + k, lm, P, limit);
+        else
+#endif
+            rt_intersect16_one(tv, cell_tris[k], lm, P, limit);
     }
+#ifndef RT_LIST_COPY
+    (void)lists;
+#endif
 }
 
 /* Lanes of m test the triangles cell_tris[from .. to) of their lists, in
@@ -333,7 +358,7 @@ __attribute__((always_inline)) inline void rt_intersect16_lists(global const flo
         uint start;
         int2 span;
         int16 in = rt_list_group(m, from, to, &start, &span);
-        rt_intersect16_group(tv, cell_tris, in, start, span, to, P, limit);
+        rt_intersect16_group(tv, 0, cell_tris, in, start, span, to, P, limit);
         m &= ~in;
     }
     if (rt_any16(m)) {
@@ -416,37 +441,6 @@ inline void rt_intersect16_turned(global const float *tv, global const float *li
     }
 }
 
-#ifdef RT_LIST_COPY
-/* rt_intersect16_one for the triangle of entry r of the list copy (the
- * layout of rt_intersect16_turned), broadcast. */
-__attribute__((always_inline)) inline void rt_intersect16_copy_one(global const float *r, int16 m,
-                                                                   rt_packet *P, float16 limit)
-{
-    rt_intersect16_core((int16)as_int(r[9 * RT_LIST_STRIDE]), m, P, limit, (float16)r[0],
-                        (float16)r[RT_LIST_STRIDE], (float16)r[2 * RT_LIST_STRIDE],
-                        (float16)r[3 * RT_LIST_STRIDE], (float16)r[4 * RT_LIST_STRIDE],
-                        (float16)r[5 * RT_LIST_STRIDE], (float16)r[6 * RT_LIST_STRIDE],
-                        (float16)r[7 * RT_LIST_STRIDE], (float16)r[8 * RT_LIST_STRIDE]);
-}
-
-/* rt_intersect16_group reading the list copy (the layout of
- * rt_intersect16_turned): a list's records are neighbours there, plane by
- * plane, where each entry of cell_tris sends the loads to a record of its
- * own. */
-__attribute__((always_inline)) inline void rt_intersect16_group_copy(global const float *lists,
-                                                                     int16 in, uint start,
-                                                                     int2 span, int16 to,
-                                                                     rt_packet *P, float16 limit)
-{
-    for (uint k = start; k < (uint)span.y; ++k) {
-        int16 lm = in;
-        if (span.x != span.y)
-            lm &= as_uint16(to) > k;
-        rt_intersect16_copy_one(lists + k, lm, P, limit);
-    }
-}
-#endif
-
 /* rt_intersect16_lists where lanes seldom share a list (the fused mode's
  * walk, the stream mode's intersect passes): every group of lanes with the
  * same list takes the cheaper way, by the count of 16-lane tests each
@@ -468,12 +462,8 @@ rt_intersect16_lists_either(global const float *tv, global const float *lists,
         uint lanes = popcount((uint)sluice_mask16(in)), n = (uint)span.y - start;
         if (lanes * ((n + 15u) / 16u) < n)
             rt_intersect16_turned(tv, lists, cell_tris, in, start, (uint)span.y, to, P, limit);
-#ifdef RT_LIST_COPY
-        else if (lists)
-            rt_intersect16_group_copy(lists, in, start, span, to, P, limit);
-#endif
         else
-            rt_intersect16_group(tv, cell_tris, in, start, span, to, P, limit);
+            rt_intersect16_group(tv, lists, cell_tris, in, start, span, to, P, limit);
         m &= ~in;
     }
 }
