@@ -1,0 +1,112 @@
+#!/bin/bash
+# The figures of issue 14 that need the lent machine (an NVIDIA GPU beside a
+# 16-core CPU, Ubuntu, no network), in one call that fits its time limit.
+#
+#   bench/lent_machine.sh OUTDIR DEADLINE_S PHASE...
+#
+# Phases, run in the order given, each cut off where it would pass the
+# deadline (seconds from the start):
+#   gpu-streams   bench_streams on the GPU in the runtime's own layout for it
+#                 (interleaved) -> OUTDIR/streams-h100.json
+#   gpu-contig    the same in the CPU's layout -> streams-h100-contiguous.json
+#   gpu-tests     the suite on the GPU (SLUICE_DEVICE=NVIDIA), less what needs
+#                 OpenImageIO (not carried) or PoCL's own options
+#   gpu-raytrace  bench_raytrace on the GPU -> raytrace-h100.json
+#   scaling=LIST  bench/bench_scaling.py on PoCL, threads in LIST's order
+#                 (1 first) -> scaling-xeon16.json, the runs in scaling-runs.tar
+#
+# LENT_DEVICE (default NVIDIA) names the device of the gpu phases, so that
+# the script can be tried on any machine first (LENT_DEVICE=pthread).
+# What it expects: the build in ./build (made on Debian 12, with rpaths
+# relative to the binaries), and the Debian libraries the non-OpenImageIO
+# binaries link in .carry/libs.tar.xz, flat (the call carries both). The
+# build's tests name /work/main, so that path is linked to this tree.
+set -u
+OUT=${1:?usage: lent_machine.sh OUTDIR DEADLINE_S PHASE...}
+DEADLINE=${2:?deadline in seconds}
+shift 2
+ROOT=$(pwd)
+LOG="$OUT/log.txt"
+mkdir -p "$OUT"
+exec > >(tee -a "$LOG") 2>&1
+
+say() { echo "[+${SECONDS}s] $*"; }
+# run CMD under a limit: the phase's own, or what is left before the deadline
+limited() {
+    local want=$1
+    shift
+    local left=$((DEADLINE - SECONDS - 5))
+    [ "$left" -lt "$want" ] && want=$left
+    if [ "$want" -lt 10 ]; then
+        say "skipped (deadline): $*"
+        return 124
+    fi
+    timeout -k 5 "$want" "$@"
+    local rc=$?
+    [ $rc -ne 0 ] && say "rc $rc: $*"
+    return $rc
+}
+
+say "setup in $ROOT"
+if [ "$ROOT" != /work/main ] && [ ! -e /work/main ]; then
+    mkdir -p /work && ln -s "$ROOT" /work/main
+fi
+mkdir -p /tmp/sluice-libs
+tar -xJf .carry/libs.tar.xz -C /tmp/sluice-libs
+export LD_LIBRARY_PATH=/tmp/sluice-libs
+# NVIDIA's OpenCL library is there but not registered with the ICD loader
+DEV=${LENT_DEVICE:-NVIDIA}
+if [ "$DEV" = NVIDIA ]; then
+    mkdir -p /etc/OpenCL/vendors
+    echo libnvidia-opencl.so.1 >/etc/OpenCL/vendors/nvidia.icd
+fi
+ls /etc/OpenCL/vendors
+export POCL_CACHE_DIR=$ROOT/build/pocl-cache
+nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv
+lscpu | grep -E "Model name|^CPU\(s\)|Flags" | cut -c1-200
+build/apps/sluice-info 2>&1 | head -30
+
+for phase in "$@"; do
+    case "$phase" in
+    gpu-streams)
+        say "bench_streams on the GPU, its own layout"
+        SLUICE_DEVICE=$DEV limited 150 build/bench/bench_streams --out "$OUT/streams-h100.json"
+        ;;
+    gpu-contig)
+        say "bench_streams on the GPU, SLUICE_LAYOUT=contiguous"
+        SLUICE_DEVICE=$DEV SLUICE_LAYOUT=contiguous limited 120 build/bench/bench_streams \
+            --skip-bitonic --out "$OUT/streams-h100-contiguous.json"
+        ;;
+    gpu-tests)
+        say "the suite on the GPU"
+        mkdir -p /tmp/gpu-tests
+        sed -e "s/SLUICE_DEVICE=;/SLUICE_DEVICE=$DEV;/g" -e "s/SLUICE_DEVICE=\")/SLUICE_DEVICE=$DEV\")/g" \
+            build/CTestTestfile.cmake >/tmp/gpu-tests/CTestTestfile.cmake
+        CTEST=$(command -v ctest || ls /opt/torch/.venv/bin/ctest /usr/local/bin/ctest 2>/dev/null | head -1)
+        excl='avx2|portable|^image$|imgdiff|^raytrace|^photonmap|^stress$|^adaptive$|^install$|bench_error_selftest'
+        if [ -n "$CTEST" ]; then
+            limited 200 "$CTEST" --test-dir /tmp/gpu-tests -j 8 --timeout 180 -E "$excl" \
+                --output-on-failure >"$OUT/gpu-tests.txt" 2>&1
+            tail -60 "$OUT/gpu-tests.txt"
+        else
+            say "no ctest on this machine"
+        fi
+        ;;
+    gpu-raytrace)
+        say "bench_raytrace on the GPU"
+        SLUICE_DEVICE=$DEV limited 150 build/bench/bench_raytrace --skip-purcell --reps 3 \
+            --out "$OUT/raytrace-h100.json"
+        ;;
+    scaling=*)
+        list=${phase#scaling=}
+        say "scaling on PoCL, threads $list"
+        limited 400 python3 bench/bench_scaling.py --threads "$list" --keep /tmp/scaling \
+            --out "$OUT/scaling-xeon16.json"
+        (cd /tmp && tar -cf "$OUT/scaling-runs.tar" scaling)
+        ;;
+    *)
+        say "unknown phase $phase"
+        ;;
+    esac
+done
+say "done"
