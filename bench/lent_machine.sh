@@ -9,6 +9,8 @@
 #   gpu-streams   bench_streams on the GPU in the runtime's own layout for it
 #                 (interleaved) -> OUTDIR/streams-h100.json
 #   gpu-contig    the same in the CPU's layout -> streams-h100-contiguous.json
+#   gpu-chunks=LIST  the same in its own layout with SLUICE_CHUNK (records
+#                 per work-item) at each value of LIST -> streams-h100-chunk-N.json
 #   gpu-tests     the suite on the GPU (SLUICE_DEVICE=NVIDIA), less what needs
 #                 OpenImageIO (not carried) or PoCL's own options
 #   gpu-raytrace  bench_raytrace on the GPU -> raytrace-h100.json
@@ -76,6 +78,13 @@ for phase in "$@"; do
         say "bench_streams on the GPU, SLUICE_LAYOUT=contiguous"
         SLUICE_DEVICE=$DEV SLUICE_LAYOUT=contiguous limited 120 build/bench/bench_streams \
             --skip-bitonic --out "$OUT/streams-h100-contiguous.json"
+        ;;
+    gpu-chunks=*)
+        for c in $(echo "${phase#gpu-chunks=}" | tr , ' '); do
+            say "bench_streams on the GPU, SLUICE_CHUNK=$c"
+            SLUICE_DEVICE=$DEV SLUICE_CHUNK=$c limited 60 build/bench/bench_streams --skip-bitonic \
+                --out "$OUT/streams-h100-chunk-$c.json"
+        done
         ;;
     gpu-tests)
         say "the suite on the GPU"

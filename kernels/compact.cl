@@ -19,7 +19,10 @@
         }                                                                                          \
     }
 
-/* 4-byte records, the common case, go 16 at a time (SLUICE_EMIT16).
+/* 4-byte records, the common case, go 16 at a time (SLUICE_EMIT16) where
+ * that is fast. Elsewhere (GPUs) they go one at a time through
+ * SLUICE_FOR_EACH, whose records a GPU's work-items read side by side
+ * (interleaved), where a range would give each its own stretch.
  *
  * COMPACT_AHEAD: the block kernels below take two blocks of 16 per step and
  * load both before emitting either. The compiler cannot move a load above
@@ -27,6 +30,7 @@
  * knows), so without this each block's loads wait behind the previous
  * block's stores. It matters with AVX2 kernels (measured in
  * bench/README.md, bench_streams). */
+#if SLUICE_EMIT16_FAST
 __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint *flags,
                          global uint *out)
 {
@@ -47,6 +51,9 @@ __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint
             SLUICE_EMIT_IF(0, out, in[i], flags[i] != 0u);
     }
 }
+#else
+COMPACT_KERNEL(uint, w1)
+#endif
 COMPACT_KERNEL(uint2, w2)
 COMPACT_KERNEL(uint4, w4)
 
@@ -98,13 +105,15 @@ __kernel void compact_words(SLUICE_PARAMS, global const uint *in, global const u
         }                                                                                          \
     }
 
-/* 4-byte records go 16 at a time: one mask per bound output. */
+/* 4-byte records go 16 at a time where that is fast (as compact_w1): one
+ * mask per bound output. */
 #define SPLIT16_SLOT_(K, OUT)                                                                      \
     do {                                                                                           \
         if (K##u < count)                                                                          \
             SLUICE_EMIT16(K, OUT, x, sluice_mask16(as_int16(bv == (uint16)K##u)));                 \
     } while (0)
 
+#if SLUICE_EMIT16_FAST
 __kernel void split_w1(SLUICE_PARAMS, global const uint *in, global const uint *buckets, uint count,
                        global uint *o0, global uint *o1, global uint *o2, global uint *o3,
                        global uint *o4, global uint *o5, global uint *o6, global uint *o7)
@@ -129,6 +138,9 @@ __kernel void split_w1(SLUICE_PARAMS, global const uint *in, global const uint *
         }
     }
 }
+#else
+SPLIT_KERNEL(uint, w1)
+#endif
 SPLIT_KERNEL(uint2, w2)
 SPLIT_KERNEL(uint4, w4)
 
@@ -154,7 +166,16 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
 
 /* Partition of scalars by a threshold: x < t goes to slot 0 (`below`), the
  * rest to slot 1 (`above`); for floats a NaN compares false and goes above.
- * Records are moved as their bit patterns, 16 at a time. */
+ * Records are moved as their bit patterns, 16 at a time where that is fast
+ * (as compact_w1), else one at a time. */
+#define PARTITION_ONE_(AS1)                                                                        \
+    do {                                                                                           \
+        uint x = in[i];                                                                            \
+        uint lo = AS1(x) < t;                                                                      \
+        SLUICE_EMIT_IF(0, below, x, lo);                                                           \
+        SLUICE_EMIT_IF(1, above, x, !lo);                                                          \
+    } while (0)
+#if SLUICE_EMIT16_FAST
 #define PARTITION_KERNEL(SUFFIX, T, T16, AS1, AS16)                                                \
     __kernel void partition_##SUFFIX(SLUICE_PARAMS, global const uint *in, T t,                    \
                                      global uint *below, global uint *above)                       \
@@ -176,14 +197,19 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
                 SLUICE_EMIT16(0, below, x, m);                                                     \
                 SLUICE_EMIT16(1, above, x, (ushort)~m);                                            \
             }                                                                                      \
-            for (; i < e; ++i) {                                                                   \
-                uint x = in[i];                                                                    \
-                uint lo = AS1(x) < t;                                                              \
-                SLUICE_EMIT_IF(0, below, x, lo);                                                   \
-                SLUICE_EMIT_IF(1, above, x, !lo);                                                  \
-            }                                                                                      \
+            for (; i < e; ++i)                                                                     \
+                PARTITION_ONE_(AS1);                                                               \
         }                                                                                          \
     }
+#else
+#define PARTITION_KERNEL(SUFFIX, T, T16, AS1, AS16)                                                \
+    __kernel void partition_##SUFFIX(SLUICE_PARAMS, global const uint *in, T t,                    \
+                                     global uint *below, global uint *above)                       \
+    {                                                                                              \
+        SLUICE_FOR_EACH (i)                                                                        \
+            PARTITION_ONE_(AS1);                                                                   \
+    }
+#endif
 
 PARTITION_KERNEL(u32, uint, uint16, , )
 PARTITION_KERNEL(f32, float, float16, as_float, as_float16)

@@ -33,7 +33,11 @@
  * the work-items of a group take the records of their chunks together, one
  * in every G (the group size) each, so that neighbouring work-items read
  * neighbouring records; launches with ordered outputs, and bodies written
- * with SLUICE_FOR_EACH_RANGE, keep a contiguous chunk per work-item.
+ * with SLUICE_FOR_EACH_RANGE, keep a contiguous chunk per work-item. There
+ * the work-group also reserves room together (SLUICE_GROUP_EMIT_ below): one
+ * global atomic per group and output, and each record's place taken from a
+ * counter in local memory, so that the records a group's work-items emit
+ * side by side land side by side.
  *
  * Rules for a body that emits:
  *   - It runs twice per record (count pass, write pass) and must emit the same
@@ -102,14 +106,30 @@ typedef struct sluice_launch_ {
     uint map_var[SLUICE_MAX_OUTPUTS]; /* the lengths of those mapped outputs */
 } sluice_launch_;
 
+/* Group emission (contexts in the interleaved layout: the runtime builds
+ * their programs with -DSLUICE_GROUP_EMIT_). In an interleaved launch, whose
+ * outputs are all unordered, the 32 work-items of a GPU warp emit their
+ * records at the same time, and a chunk's own reserved range per work-item
+ * would scatter those 32 stores over 32 ranges. So the group reserves room
+ * for its work-items together and hands out places one record at a time
+ * from a counter in local memory (sluice_lds_): records emitted side by side
+ * land side by side. Local memory per group: a cursor, the reserved start
+ * and its end per output (SLUICE_LDS_WORDS_). The barriers are reached by
+ * every work-item of the group (the body never returns or breaks), and only
+ * in such launches: their conditions are the same for the whole launch.
+ * Contexts in the contiguous layout (CPUs) build without any of it. */
+#define SLUICE_LDS_WORDS_ (3 * SLUICE_MAX_OUTPUTS)
+
 /* Per-work-item state of one launch. */
 typedef struct sluice_state_ {
     uint begin, end; /* the chunk: records begin, begin + step, ... before end */
     uint step;       /* 1 (contiguous), or the work-group size (interleaved) */
     uint pass;       /* 0: count, 1: write */
     uint chunk_id;
+    uint group;      /* 1: the group reserves room together (group emission) */
+    local uint *lds; /* its cursors, starts and ends (SLUICE_LDS_WORDS_) */
     uint cnt[SLUICE_MAX_OUTPUTS]; /* records this chunk emits, per output */
-    uint pos[SLUICE_MAX_OUTPUTS]; /* next slot to write */
+    uint pos[SLUICE_MAX_OUTPUTS]; /* next slot to write; the group's start in group emission */
     uint lim[SLUICE_MAX_OUTPUTS]; /* end of the reserved range, clamped to capacity */
     uint ctr[SLUICE_MAX_COUNTERS];
 } sluice_state_;
@@ -146,7 +166,7 @@ inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint
  * read neighbouring records. The host interleaves only launches without
  * ordered outputs, which rely on each chunk being contiguous. */
 inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
-                          const sluice_launch_ *L, int range)
+                          local uint *lds, const sluice_launch_ *L, int range)
 {
     uint n = L->n_fixed;
     if (n == SLUICE_NONE) {
@@ -169,6 +189,19 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
         s->step = 1u;
     }
     s->pass = L->first_pass;
+    s->lds = lds;
+    s->group = 0u;
+#ifdef SLUICE_GROUP_EMIT_
+    /* interleaved with outputs (all unordered, mode 0): the same for the
+     * whole launch, so the whole group takes the barrier or none does */
+    if (s->step > 1u && L->out_mask != 0u) {
+        s->group = 1u;
+        if (get_local_id(0) == 0)
+            for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+                lds[k] = 0u;
+        barrier(CLK_LOCAL_MEM_FENCE);
+    }
+#endif
     for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
         s->cnt[k] = 0;
         s->pos[k] = 0;
@@ -185,11 +218,48 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
         s->ctr[c] = 0;
 }
 
+/* Group emission's reservation, between the passes: the group's counts,
+ * one global atomic per output for all of them, then every work-item reads
+ * the group's start and end. */
+inline void sluice_group_reserve_(sluice_state_ *s, global uint *vars, const sluice_launch_ *L)
+{
+#ifdef SLUICE_GROUP_EMIT_
+    local uint *lds = s->lds;
+    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+        if (s->cnt[k])
+            atomic_add(&lds[k], s->cnt[k]);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (get_local_id(0) == 0) {
+        for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+            uint total = lds[k], p = 0u, lim = 0u;
+            if (((L->out_mask >> k) & 1u) && total && vars[L->out_var[k]] != SLUICE_VOID_) {
+                p = atomic_add(&vars[L->out_var[k]], total);
+                lim = (uint)min((ulong)p + total, (ulong)L->out_cap[k]);
+            }
+            lds[k] = 0u;
+            lds[SLUICE_MAX_OUTPUTS + k] = p;
+            lds[2 * SLUICE_MAX_OUTPUTS + k] = lim;
+        }
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+        s->pos[k] = lds[SLUICE_MAX_OUTPUTS + k];
+        s->lim[k] = lds[2 * SLUICE_MAX_OUTPUTS + k];
+    }
+#else
+    (void)s;
+    (void)vars;
+    (void)L;
+#endif
+}
+
 /* Runs between the passes and after the last one. */
 inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scratch,
                          const sluice_launch_ *L)
 {
-    if (s->pass == 0) {
+    if (s->pass == 0 && s->group) {
+        sluice_group_reserve_(s, vars, L);
+    } else if (s->pass == 0) {
         for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
             if (!((L->out_mask >> k) & 1u))
                 continue;
@@ -227,7 +297,8 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
 /* The hidden parameters every stream kernel takes first. The host numbers the
  * kernel's own parameters from 0, starting after these. */
 #define SLUICE_PARAMS                                                                              \
-    global uint *sluice_vars_, global uint *sluice_scratch_, const sluice_launch_ sluice_L_
+    global uint *sluice_vars_, global uint *sluice_scratch_, const sluice_launch_ sluice_L_,       \
+        local uint *sluice_lds_
 
 /* Loops over this work-item's records, with the record index in `id`, in
  * increasing order. The statement (usually a block) that follows is the
@@ -237,7 +308,7 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
  * SLUICE_FOR_EACH_RANGE. */
 #define SLUICE_FOR_EACH(id)                                                                        \
     sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_, 0);                       \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_, 0);          \
     for (; sluice_s_.pass < 2u;                                                                    \
          sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
         for (uint id = sluice_s_.begin; id < sluice_s_.end; id += sluice_s_.step)
@@ -250,7 +321,7 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
  * it too, e.g. for a tail of fewer than 16 records. */
 #define SLUICE_FOR_EACH_RANGE(b, e)                                                                \
     sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_, 1);                       \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_, 1);          \
     for (; sluice_s_.pass < 2u;                                                                    \
          sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
         for (uint b = sluice_s_.begin, e = sluice_s_.end, sluice_once_ = 1u; sluice_once_;         \
@@ -272,6 +343,17 @@ inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
         s->cnt[slot] += c;
         return cap;
     }
+#ifdef SLUICE_GROUP_EMIT_
+    if (s->group) {
+        /* the next place of the group's room; nothing written is a place
+         * another work-item's record may take, so an unemitted record goes
+         * to the spare one */
+        if (!c)
+            return cap;
+        uint p = s->pos[slot] + atomic_inc(&s->lds[slot]);
+        return p < s->lim[slot] ? p : cap;
+    }
+#endif
     uint p = s->pos[slot];
     s->pos[slot] = p + c;
     return p < s->lim[slot] ? p : cap;
@@ -542,6 +624,22 @@ inline ushort sluice_mask16_(const int16 *c)
 #endif
 }
 
+/* Writes the lanes of *x selected by m to buf[p], buf[p + 1], ..., those at
+ * or past lim dropped (an overflowing output). The copy keeps the
+ * lane-by-lane reads off the caller's vector. */
+inline void sluice_emit_lanes_(global uint *buf, const uint16 *x, ushort m, uint p, uint lim)
+{
+    uint16 lanes = *x;
+    const uint *v = (const uint *)&lanes;
+    for (uint l = 0; l < 16u; ++l) {
+        if ((m >> l) & 1u) {
+            if (p < lim)
+                buf[p] = v[l];
+            ++p;
+        }
+    }
+}
+
 inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const uint16 *x, ushort m)
 {
     uint k = popcount((uint)m);
@@ -550,6 +648,15 @@ inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const 
         return;
     }
     uint p = s->pos[slot], lim = s->lim[slot];
+#ifdef SLUICE_GROUP_EMIT_
+    if (s->group) {
+        /* k places of the group's room, lane by lane: a block store would
+         * reach places that other work-items' records take */
+        if (k)
+            sluice_emit_lanes_(buf, x, m, p + atomic_add(&s->lds[slot], k), lim);
+        return;
+    }
+#endif
     s->pos[slot] = p + k;
 #ifdef SLUICE_AVX512_
     /* The kernels run on the host CPU, where every address space is plain
@@ -579,17 +686,8 @@ inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const 
         return;
     }
 #endif
-    /* Near an overflowing output's capacity, or without AVX-512. The copy
-     * keeps the lane-by-lane reads off the caller's vector. */
-    uint16 lanes = *x;
-    const uint *v = (const uint *)&lanes;
-    for (uint l = 0; l < 16u; ++l) {
-        if ((m >> l) & 1u) {
-            if (p < lim)
-                buf[p] = v[l];
-            ++p;
-        }
-    }
+    /* Near an overflowing output's capacity, or without AVX-512. */
+    sluice_emit_lanes_(buf, x, m, p, lim);
 }
 
 /* Emits the lanes of `x` (a uint16; use as_uint16 for other 32-bit types)

@@ -5,8 +5,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Hidden parameters before the user's: variable pool, scratch, launch info. */
-#define SL_HIDDEN_ARGS 3u
+/* Hidden parameters before the user's: variable pool, scratch, launch info,
+ * local memory for group emission (kernels/sluice.cl). */
+#define SL_HIDDEN_ARGS 4u
+#define SL_LDS_WORDS (3u * SLUICE_MAX_OUTPUTS) /* SLUICE_LDS_WORDS_ */
 
 sluice_status sluice_kernel_create(sluice_program *program, const char *name, sluice_kernel **out)
 {
@@ -259,6 +261,8 @@ static sluice_status set_hidden(sluice_kernel *k, const sl_launch *L)
         err = clSetKernelArg(k->cl, 1, sizeof(cl_mem), &scratch);
     if (err == CL_SUCCESS)
         err = clSetKernelArg(k->cl, 2, sizeof *L, L);
+    if (err == CL_SUCCESS)
+        err = clSetKernelArg(k->cl, 3, SL_LDS_WORDS * sizeof(cl_uint), NULL);
     return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "setting launch arguments");
 }
 

@@ -268,7 +268,10 @@ sluice_status sluice_program_build(sluice_program *p)
         clReleaseProgram(prog);
         return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
     }
-    snprintf(opts, ol, "-cl-std=CL1.2%s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "", p->options);
+    /* the interleaved layout's stream kernels reserve room per work-group
+     * (group emission, kernels/sluice.cl) */
+    snprintf(opts, ol, "-cl-std=CL1.2%s%s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "",
+             ctx->layout == SLUICE_LAYOUT_INTERLEAVED ? " -DSLUICE_GROUP_EMIT_" : "", p->options);
     stderr_capture capture;
     capture_begin(&capture);
     err = clBuildProgram(prog, 1, &ctx->device, opts, NULL, NULL);
