@@ -220,15 +220,19 @@ sluice_status sluice_kernel_set_counters(sluice_kernel *k, sluice_counters *coun
  * so both cores stay busy and the ordered scan stays small. Up to 16384
  * records (64 KiB of 4-byte records, well inside L2 for the second pass):
  * at 2^24 records that measured 61-62% of copy for split against 54-59% with
- * 4096 (bench_streams --reps 15, two runs each). */
-static size_t choose_chunk(const sluice_context *ctx, size_t bound)
+ * 4096 (bench_streams --reps 15, two runs each). In the interleaved layout
+ * (GPUs) up to 64 records, and up to 256 in launches with ordered outputs:
+ * those walk contiguous chunks and one work-group scans their chunk counts,
+ * which at 64 records a chunk took longer than the launch itself
+ * (bench/README.md, the H100). */
+static size_t choose_chunk(const sluice_context *ctx, size_t bound, int ordered)
 {
     if (ctx->chunk)
         return ctx->chunk;
     size_t lo = 16, hi = 16384, want = bound / 1024;
     if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED) {
-        lo = 1;
-        hi = 64;
+        lo = ordered ? 16 : 1;
+        hi = ordered ? 256 : 64;
         want = bound / 65536;
     }
     return want < lo ? lo : want > hi ? hi : want;
@@ -353,7 +357,10 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
             L.map_var[L.n_map++] = k->arg_stream[a]->var;
     }
 
-    size_t chunk = choose_chunk(ctx, bound);
+    int any_ordered = 0;
+    for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
+        any_ordered |= k->out[s] && k->out_mode[s] == SLUICE_ORDERED;
+    size_t chunk = choose_chunk(ctx, bound, any_ordered);
     size_t chunks = (bound + chunk - 1) / chunk;
     size_t global = sl_round_up(chunks ? chunks : 1, k->group);
     L.chunk = (cl_uint)chunk;
