@@ -41,8 +41,15 @@ inline void scan_range_(uint n, uint chunk, uint *begin, uint *end)
     *end = (uint)min(b + chunk, (ulong)n);
 }
 
-/* x shifted up k lanes (k = 1, 2, 4, 8), zeros (z) shifted in. */
-#define SCAN_SHIFT_(z, x, k) SCAN_SHIFT_##k##_(z, x)
+/* x (a T16) shifted up k lanes (k = 1, 2, 4, 8), zeros shifted in. With
+ * AVX-512 as one valignd of x and zeros: Clang lowers the shuffle below to
+ * vpexpandd there, which on AMD's Zen 4 made the scan's write pass 2.2x
+ * slower than with the AVX2 kernels (bench/README.md). */
+#if defined(SLUICE_AVX512_) && __has_builtin(__builtin_ia32_alignd512)
+#define SCAN_SHIFT_(T16, x, k) as_##T16(__builtin_ia32_alignd512(as_int16(x), (int16)(0), 16 - (k)))
+#else
+#define SCAN_SHIFT_(T16, x, k) SCAN_SHIFT_##k##_((T16)(0), x)
+#endif
 #define SCAN_SHIFT_1_(z, x)                                                                        \
     SLUICE_SHUF16_(z, x, 0, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30)
 #define SCAN_SHIFT_2_(z, x)                                                                        \
@@ -52,14 +59,14 @@ inline void scan_range_(uint n, uint chunk, uint *begin, uint *end)
 #define SCAN_SHIFT_8_(z, x)                                                                        \
     SLUICE_SHUF16_(z, x, 0, 0, 0, 0, 0, 0, 0, 0, 16, 17, 18, 19, 20, 21, 22, 23)
 
-/* p (16 lanes) becomes its inclusive prefix sum, in four shifted adds
- * (Hillis and Steele); z is a zero vector of p's type. */
-#define SCAN_PREFIX16_(z, p)                                                                       \
+/* p (16 lanes of type T16) becomes its inclusive prefix sum, in four
+ * shifted adds (Hillis and Steele). */
+#define SCAN_PREFIX16_(T16, p)                                                                     \
     do {                                                                                           \
-        p += SCAN_SHIFT_(z, p, 1);                                                                 \
-        p += SCAN_SHIFT_(z, p, 2);                                                                 \
-        p += SCAN_SHIFT_(z, p, 4);                                                                 \
-        p += SCAN_SHIFT_(z, p, 8);                                                                 \
+        p += SCAN_SHIFT_(T16, p, 1);                                                               \
+        p += SCAN_SHIFT_(T16, p, 2);                                                               \
+        p += SCAN_SHIFT_(T16, p, 4);                                                               \
+        p += SCAN_SHIFT_(T16, p, 8);                                                               \
     } while (0)
 
 #define SCAN_KERNELS(T, T16, SUFFIX)                                                               \
@@ -103,11 +110,11 @@ inline void scan_range_(uint n, uint chunk, uint *begin, uint *end)
         T carry = sums[get_global_id(0)];                                                          \
         uint i = begin;                                                                            \
         for (; i + 16u <= end; i += 16u) {                                                         \
-            T16 z = (T16)(0), p = *(global const sluice_##T16##_unaligned_ *)(in + i);             \
-            SCAN_PREFIX16_(z, p);                                                                  \
+            T16 p = *(global const sluice_##T16##_unaligned_ *)(in + i);                           \
+            SCAN_PREFIX16_(T16, p);                                                                \
             /* exclusive: the inclusive prefix shifted up one lane (p - v is                       \
              * not exact for floats, and inf - inf is NaN) */                                      \
-            T16 e = inclusive ? p : SCAN_SHIFT_(z, p, 1);                                          \
+            T16 e = inclusive ? p : SCAN_SHIFT_(T16, p, 1);                                        \
             *(global sluice_##T16##_unaligned_ *)(out + i) = e + carry;                            \
             carry += p.sf;                                                                         \
         }                                                                                          \
