@@ -126,8 +126,8 @@ typedef struct sluice_state_ {
     uint step;       /* 1 (contiguous), or the work-group size (interleaved) */
     uint pass;       /* 0: count, 1: write */
     uint chunk_id;
-    uint group;      /* 1: the group reserves room together (group emission) */
-    local uint *lds; /* its cursors, starts and ends (SLUICE_LDS_WORDS_) */
+    uint group;                   /* 1: the group reserves room together (group emission) */
+    local uint *lds;              /* its cursors, starts and ends (SLUICE_LDS_WORDS_) */
     uint cnt[SLUICE_MAX_OUTPUTS]; /* records this chunk emits, per output */
     uint pos[SLUICE_MAX_OUTPUTS]; /* next slot to write; the group's start in group emission */
     uint lim[SLUICE_MAX_OUTPUTS]; /* end of the reserved range, clamped to capacity */

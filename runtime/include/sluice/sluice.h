@@ -114,9 +114,13 @@ typedef enum sluice_layout {
     /** Work-groups of up to 256 work-items take contiguous tiles, and within
      *  a tile work-item l takes records l, l + G, l + 2G, ... (G the group
      *  size), so neighbouring work-items read neighbouring records, as a GPU
-     *  wants (coalesced loads). Ordered outputs and SLUICE_FOR_EACH_RANGE
-     *  keep contiguous chunks per work-item. The chunk counts of ordered
-     *  outputs are scanned by a work-group instead of one work-item. */
+     *  wants (coalesced loads). The work-items of a group reserve room for
+     *  their unordered outputs together and take each emitted record's
+     *  place from a counter in local memory, so records emitted side by side
+     *  land side by side (their order within a group is not the input's).
+     *  Ordered outputs and SLUICE_FOR_EACH_RANGE keep contiguous chunks per
+     *  work-item. The chunk counts of ordered outputs are scanned by a
+     *  work-group instead of one work-item. */
     SLUICE_LAYOUT_INTERLEAVED = 2
 } sluice_layout;
 
