@@ -16,6 +16,10 @@
 #   gpu-raytrace  bench_raytrace on the GPU -> raytrace-h100.json
 #   scaling=LIST  bench/bench_scaling.py on PoCL, threads in LIST's order
 #                 (1 first) -> scaling-xeon16.json, the runs in scaling-runs.tar
+#   libs-probe    which libraries of the OpenImageIO programs' closure (the
+#                 sonames in .carry/oiio-libs.txt, one a line: `ldd` here) the
+#                 machine lacks -> oiio-missing.txt, so that a later call can
+#                 carry just those and run the whole suite there
 #
 # LENT_DEVICE (default NVIDIA) names the device of the gpu phases, so that
 # the script can be tried on any machine first (LENT_DEVICE=pthread).
@@ -23,7 +27,42 @@
 # relative to the binaries), and the Debian libraries the non-OpenImageIO
 # binaries link in .carry/libs.tar.xz, flat (the call carries both). The
 # build's tests name /work/main, so that path is linked to this tree.
+#
+#   bench/lent_machine.sh --pack
+#
+# makes .carry here, on the machine that built ./build: the libraries (the
+# `ldd` closure of every program that does not link OpenImageIO, less
+# glibc's and the compiler's own, which the lent machine has newer), glmark2's
+# bunny and the sonames the OpenImageIO programs need (for libs-probe); then
+# call the tool with carry ["build", ".carry"].
 set -u
+if [ "${1:-}" = --pack ]; then
+    mkdir -p .carry
+    grep -qx '/.carry/' .git/info/exclude 2>/dev/null || echo /.carry/ >>.git/info/exclude
+    progs=""
+    for b in build/bench/bench_* build/tests/test_* build/apps/sluice-info build/apps/common/sluice-* \
+        build/apps/examples/*/sluice-example-* build/apps/raytrace/sluice-raytrace \
+        build/apps/photonmap/sluice-photonmap; do
+        [ -x "$b" ] && [ -f "$b" ] && progs="$progs $b"
+    done
+    plain=""
+    oiio=""
+    for b in $progs; do
+        if ldd "$b" | grep -q OpenImageIO; then oiio="$oiio $b"; else plain="$plain $b"; fi
+    done
+    # shellcheck disable=SC2086
+    ldd $plain | awk '$3 ~ /^\// {print $3}' | sort -u | grep -v "$(pwd)/build" |
+        grep -vE '/(libc|libm|libgcc_s|libstdc\+\+)\.so' >.carry/libs.txt
+    # shellcheck disable=SC2046
+    tar -chPf - --transform='s,.*/,,' $(cat .carry/libs.txt) | xz -6 -T0 >.carry/libs.tar.xz
+    # shellcheck disable=SC2086
+    ldd $oiio | awk '$3 ~ /^\// {print $1}' | sort -u | grep -v libsluice >.carry/oiio-libs.txt
+    cp /usr/share/glmark2/models/bunny.obj .carry/
+    du -sh .carry build
+    # the tool carries 64 MiB at most; PoCL's caches are no use there
+    echo "carry at most 64 MiB: remove build/pocl-cache* and build/tests/pocl-cache* first if build is large"
+    exit 0
+fi
 OUT=${1:?usage: lent_machine.sh OUTDIR DEADLINE_S PHASE...}
 DEADLINE=${2:?deadline in seconds}
 shift 2
@@ -50,6 +89,9 @@ limited() {
 }
 
 say "setup in $ROOT"
+if [ -f .carry/bunny.obj ] && [ ! -e /usr/share/glmark2/models/bunny.obj ]; then
+    mkdir -p /usr/share/glmark2/models && cp .carry/bunny.obj /usr/share/glmark2/models/
+fi
 if [ "$ROOT" != /work/main ] && [ ! -e /work/main ]; then
     mkdir -p /work && ln -s "$ROOT" /work/main
 fi
@@ -112,6 +154,13 @@ for phase in "$@"; do
         limited 400 python3 bench/bench_scaling.py --threads "$list" --keep /tmp/scaling \
             --out "$OUT/scaling-xeon16.json"
         (cd /tmp && tar -cf "$OUT/scaling-runs.tar" scaling)
+        ;;
+    libs-probe)
+        say "libraries of the OpenImageIO programs the machine lacks"
+        while read -r lib; do
+            ldconfig -p | grep -q "^[[:space:]]*$lib " || echo "$lib"
+        done <.carry/oiio-libs.txt >"$OUT/oiio-missing.txt"
+        echo "$(wc -l <"$OUT/oiio-missing.txt") of $(wc -l <.carry/oiio-libs.txt) missing"
         ;;
     *)
         say "unknown phase $phase"
