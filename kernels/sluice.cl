@@ -45,7 +45,9 @@
  *     it wrote itself. Put heavy work in a kernel without conditional outputs,
  *     or guard other writes with `if (SLUICE_WRITING)`.
  *   - Use `continue` to skip the rest of a record. Never `return` or `break`:
- *     they would skip the reservation and the counter flush.
+ *     they would skip the reservation and the counter flush. Nor `return`
+ *     before SLUICE_FOR_EACH: group emission's barriers (below) need every
+ *     work-item of the group.
  *   - Emit with constant slot numbers (0 .. SLUICE_MAX_OUTPUTS-1).
  */
 #ifndef SLUICE_CL_INCLUDED
