@@ -220,6 +220,22 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
         s->ctr[c] = 0;
 }
 
+/* Reserves room for `count` records of unordered output k: returns where
+ * it starts and sets *lim to its end, clamped to the capacity (records past
+ * it are dropped; the length counts them, so the overflow is reported). A
+ * void output stays void: nothing is appended to it. */
+inline uint sluice_reserve_(global uint *vars, const sluice_launch_ *L, uint k, uint count,
+                            uint *lim)
+{
+    uint p = 0u;
+    *lim = 0u;
+    if (count && vars[L->out_var[k]] != SLUICE_VOID_) {
+        p = atomic_add(&vars[L->out_var[k]], count);
+        *lim = (uint)min((ulong)p + count, (ulong)L->out_cap[k]);
+    }
+    return p;
+}
+
 /* Group emission's reservation, between the passes: the group's counts,
  * one global atomic per output for all of them, then every work-item reads
  * the group's start and end. */
@@ -233,14 +249,11 @@ inline void sluice_group_reserve_(sluice_state_ *s, global uint *vars, const slu
     barrier(CLK_LOCAL_MEM_FENCE);
     if (get_local_id(0) == 0) {
         for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
-            uint total = lds[k], p = 0u, lim = 0u;
-            if (((L->out_mask >> k) & 1u) && total && vars[L->out_var[k]] != SLUICE_VOID_) {
-                p = atomic_add(&vars[L->out_var[k]], total);
-                lim = (uint)min((ulong)p + total, (ulong)L->out_cap[k]);
-            }
-            lds[k] = 0u;
-            lds[SLUICE_MAX_OUTPUTS + k] = p;
+            uint lim = 0u;
+            lds[SLUICE_MAX_OUTPUTS + k] =
+                (L->out_mask >> k) & 1u ? sluice_reserve_(vars, L, k, lds[k], &lim) : 0u;
             lds[2 * SLUICE_MAX_OUTPUTS + k] = lim;
+            lds[k] = 0u;
         }
     }
     barrier(CLK_LOCAL_MEM_FENCE);
@@ -270,15 +283,8 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
                 if (ordered)
                     scratch[k * L->stride + s->chunk_id] = s->cnt[k];
             } else if (!ordered) {
-                /* One global atomic per chunk and output. A void output stays
-                 * void: nothing is appended to it. */
-                uint p = 0u, lim = 0u;
-                if (s->cnt[k] && vars[L->out_var[k]] != SLUICE_VOID_) {
-                    p = atomic_add(&vars[L->out_var[k]], s->cnt[k]);
-                    lim = (uint)min((ulong)p + s->cnt[k], (ulong)L->out_cap[k]);
-                }
-                s->pos[k] = p;
-                s->lim[k] = lim;
+                /* One global atomic per chunk and output. */
+                s->pos[k] = sluice_reserve_(vars, L, k, s->cnt[k], &s->lim[k]);
             }
         }
     } else {

@@ -357,17 +357,6 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
             L.map_var[L.n_map++] = k->arg_stream[a]->var;
     }
 
-    int any_ordered = 0;
-    for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
-        any_ordered |= k->out[s] && k->out_mode[s] == SLUICE_ORDERED;
-    size_t chunk = choose_chunk(ctx, bound, any_ordered);
-    size_t chunks = (bound + chunk - 1) / chunk;
-    size_t global = sl_round_up(chunks ? chunks : 1, k->group);
-    L.chunk = (cl_uint)chunk;
-    L.stride = (cl_uint)(global + 1);
-    L.counter_var = k->counters ? k->counters->var : SL_NONE;
-    L.n_counters = k->counters ? (cl_uint)k->counters->count : 0;
-    L.prof_var = k->prof_var;
     int any_unordered = 0;
     for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s) {
         sluice_stream *o = k->out[s];
@@ -381,6 +370,14 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         else
             any_unordered = 1;
     }
+    size_t chunk = choose_chunk(ctx, bound, L.ordered_mask != 0);
+    size_t chunks = (bound + chunk - 1) / chunk;
+    size_t global = sl_round_up(chunks ? chunks : 1, k->group);
+    L.chunk = (cl_uint)chunk;
+    L.stride = (cl_uint)(global + 1);
+    L.counter_var = k->counters ? k->counters->var : SL_NONE;
+    L.n_counters = k->counters ? (cl_uint)k->counters->count : 0;
+    L.prof_var = k->prof_var;
 
     /* Stream arguments are set now, so swaps and grows since binding count. */
     for (unsigned a = 0; a < k->n_args; ++a) {
