@@ -8,6 +8,11 @@
 # deadline (seconds from the start):
 #   gpu-streams   bench_streams on the GPU in the runtime's own layout for it
 #                 (interleaved) -> OUTDIR/streams-h100.json
+#   gpu-streams-n=N  the same on N records -> streams-h100-nN.json
+#   gpu-profile   the same with SLUICE_PROFILE=1 (the kernels' own times on
+#                 the device, every launch) -> profile-h100.txt
+#   gpu-regs      NVIDIA's build logs with -cl-nv-verbose (registers, spills
+#                 and local memory per kernel) -> regs-h100.txt
 #   gpu-contig    the same in the CPU's layout -> streams-h100-contiguous.json
 #   gpu-chunks=LIST  the same in its own layout with SLUICE_CHUNK (records
 #                 per work-item) at each value of LIST -> streams-h100-chunk-N.json
@@ -115,6 +120,24 @@ for phase in "$@"; do
     gpu-streams)
         say "bench_streams on the GPU, its own layout"
         SLUICE_DEVICE=$DEV limited 150 build/bench/bench_streams --out "$OUT/streams-h100.json"
+        ;;
+    gpu-streams-n=*)
+        nrec=${phase#gpu-streams-n=}
+        say "bench_streams on the GPU, $nrec records"
+        SLUICE_DEVICE=$DEV limited 150 build/bench/bench_streams --n "$nrec" --skip-bitonic \
+            --out "$OUT/streams-h100-n$nrec.json"
+        ;;
+    gpu-profile)
+        say "bench_streams on the GPU with SLUICE_PROFILE=1"
+        SLUICE_DEVICE=$DEV SLUICE_PROFILE=1 limited 90 build/bench/bench_streams --reps 3 \
+            --skip-bitonic >"$OUT/profile-h100.txt" 2>&1
+        head -32 "$OUT/profile-h100.txt"
+        ;;
+    gpu-regs)
+        say "NVIDIA's build logs (-cl-nv-verbose)"
+        SLUICE_DEVICE=$DEV SLUICE_BUILD_OPTIONS=-cl-nv-verbose SLUICE_VERBOSE=1 limited 90 \
+            build/bench/bench_streams --n 65536 --reps 1 --skip-bitonic >"$OUT/regs-h100.txt" 2>&1
+        grep -E "Compiling entry|Used [0-9]+ registers|spill" "$OUT/regs-h100.txt" | head -80
         ;;
     gpu-contig)
         say "bench_streams on the GPU, SLUICE_LAYOUT=contiguous"

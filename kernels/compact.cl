@@ -20,9 +20,11 @@
     }
 
 /* 4-byte records, the common case, go 16 at a time (SLUICE_EMIT16) where
- * that is fast. Elsewhere (GPUs) they go one at a time through
- * SLUICE_FOR_EACH, whose records a GPU's work-items read side by side
- * (interleaved), where a range would give each its own stretch.
+ * that is fast. Elsewhere (GPUs) they go 4 at a time as one vector
+ * (SLUICE_FOR_EACH_BLOCK, SLUICE_EMIT4), whose blocks a GPU's work-items
+ * read side by side (interleaved), where a range would give each its own
+ * stretch; one record at a time kept one 4-byte load in flight per
+ * work-item (bench/README.md, the H100).
  *
  * COMPACT_AHEAD: the block kernels below take two blocks of 16 per step and
  * load both before emitting either. The compiler cannot move a load above
@@ -52,7 +54,25 @@ __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint
     }
 }
 #else
-COMPACT_KERNEL(uint, w1)
+__kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint *flags,
+                         global uint *out)
+{
+    SLUICE_FOR_EACH_BLOCK(b, e)
+    {
+        uint i = b;
+        if (e - b == 4u && (b & 3u) == 0u) {
+            uint4 f = *(global const uint4 *)(flags + b);
+            uint m = sluice_mask4(f != (uint4)0u);
+            uint4 x = (uint4)0u; /* read where some are kept, in the pass that writes */
+            if (m && SLUICE_WRITING)
+                x = *(global const uint4 *)(in + b);
+            SLUICE_EMIT4(0, out, x, m);
+            i = e;
+        }
+        for (; i < e; ++i)
+            SLUICE_EMIT_IF(0, out, in[i], flags[i] != 0u);
+    }
+}
 #endif
 COMPACT_KERNEL(uint2, w2)
 COMPACT_KERNEL(uint4, w4)
@@ -176,7 +196,7 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
         SLUICE_EMIT_IF(1, above, x, !lo);                                                          \
     } while (0)
 #if SLUICE_EMIT16_FAST
-#define PARTITION_KERNEL(SUFFIX, T, T16, AS1, AS16)                                                \
+#define PARTITION_KERNEL(SUFFIX, T, T16, AS1, AS16, AS4)                                           \
     __kernel void partition_##SUFFIX(SLUICE_PARAMS, global const uint *in, T t,                    \
                                      global uint *below, global uint *above)                       \
     {                                                                                              \
@@ -202,14 +222,26 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
         }                                                                                          \
     }
 #else
-#define PARTITION_KERNEL(SUFFIX, T, T16, AS1, AS16)                                                \
+/* 4 records at a time as one vector (compact_w1's comment) */
+#define PARTITION_KERNEL(SUFFIX, T, T16, AS1, AS16, AS4)                                           \
     __kernel void partition_##SUFFIX(SLUICE_PARAMS, global const uint *in, T t,                    \
                                      global uint *below, global uint *above)                       \
     {                                                                                              \
-        SLUICE_FOR_EACH (i)                                                                        \
-            PARTITION_ONE_(AS1);                                                                   \
+        SLUICE_FOR_EACH_BLOCK(b, e)                                                                \
+        {                                                                                          \
+            uint i = b;                                                                            \
+            if (e - b == 4u && (b & 3u) == 0u) {                                                   \
+                uint4 x = *(global const uint4 *)(in + b);                                         \
+                uint m = sluice_mask4(AS4(x) < (T##4)t);                                           \
+                SLUICE_EMIT4(0, below, x, m);                                                      \
+                SLUICE_EMIT4(1, above, x, ~m);                                                     \
+                i = e;                                                                             \
+            }                                                                                      \
+            for (; i < e; ++i)                                                                     \
+                PARTITION_ONE_(AS1);                                                               \
+        }                                                                                          \
     }
 #endif
 
-PARTITION_KERNEL(u32, uint, uint16, , )
-PARTITION_KERNEL(f32, float, float16, as_float, as_float16)
+PARTITION_KERNEL(u32, uint, uint16, , , )
+PARTITION_KERNEL(f32, float, float16, as_float, as_float16, as_float4)

@@ -137,10 +137,20 @@ SCAN_KERNELS(float, float16, f32)
 
 /* Passes 1 and 3 for GPUs (the runtime's interleaved layout): one work-group
  * per chunk, whose work-items read neighbouring records together (coalesced)
- * instead of one work-item walking the chunk. Pass 1 sums the chunk in a
- * tree in local memory; pass 3 scans it G records (the group size, a power
- * of two) at a time, each round a Hillis-Steele scan in local memory added
- * to the carry of the rounds before. `part` holds one T per work-item. */
+ * instead of one work-item walking the chunk. Pass 1 sums the chunk
+ * (SLUICE_GROUP_REDUCE_). Pass 3 takes the chunk in rounds of 4 Q g records
+ * (g the group size, a power of two): work-item l loads the Q 4-record
+ * vectors at 4 (q g + l), q < Q, all before waiting on any (a GPU keeps that
+ * many loads in flight per work-item, where one record at a time left an
+ * H100 at half its bandwidth, bench/README.md), scans each vector in
+ * registers, and the group scans the round's Q g vector sums in local
+ * memory: each work-item its Q consecutive sums, then a Hillis-Steele scan
+ * of the g work-items' totals. `part` holds Q g T (pass 3) or g T (pass 1).
+ * The host's chunks are multiples of 1024 records, so every vector starts
+ * on a 16-byte boundary; a round past the end reads and writes record by
+ * record. */
+#define SCAN_Q_ 4u
+
 inline void scan_group_range_(uint n, uint chunk, uint *begin, uint *end)
 {
     ulong b = (ulong)get_group_id(0) * chunk;
@@ -167,9 +177,35 @@ inline void scan_group_range_(uint n, uint chunk, uint *begin, uint *end)
         uint l = (uint)get_local_id(0), g = (uint)get_local_size(0), begin, end;                   \
         scan_group_range_(scan_length_(vars, in_var, n_fixed, limit), chunk, &begin, &end);        \
         T carry = sums[get_group_id(0)];                                                           \
-        for (uint base = begin; base < end; base += g) {                                           \
-            uint i = base + l;                                                                     \
-            part[l] = i < end ? in[i] : (T)(0);                                                    \
+        for (uint base = begin; base < end; base += 4u * SCAN_Q_ * g) {                            \
+            T##4 v[SCAN_Q_];                                                                       \
+            for (uint q = 0; q < SCAN_Q_; ++q) {                                                   \
+                uint i = base + 4u * (q * g + l);                                                  \
+                if (i + 4u <= end) {                                                               \
+                    v[q] = *(global const T##4 *)(in + i);                                         \
+                } else {                                                                           \
+                    v[q].s0 = i < end ? in[i] : (T)(0);                                            \
+                    v[q].s1 = i + 1u < end ? in[i + 1u] : (T)(0);                                  \
+                    v[q].s2 = i + 2u < end ? in[i + 2u] : (T)(0);                                  \
+                    v[q].s3 = (T)(0);                                                              \
+                }                                                                                  \
+            }                                                                                      \
+            /* each vector's inclusive scan; its sum to local memory */                            \
+            for (uint q = 0; q < SCAN_Q_; ++q) {                                                   \
+                v[q].s1 += v[q].s0;                                                                \
+                v[q].s2 += v[q].s1;                                                                \
+                v[q].s3 += v[q].s2;                                                                \
+                part[q * g + l] = v[q].s3;                                                         \
+            }                                                                                      \
+            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
+            /* work-item l: the sums of vectors Q l .. Q l + Q - 1 in round order */               \
+            T t[SCAN_Q_], s = (T)(0);                                                              \
+            for (uint k = 0; k < SCAN_Q_; ++k) {                                                   \
+                t[k] = part[SCAN_Q_ * l + k];                                                      \
+                s += t[k];                                                                         \
+            }                                                                                      \
+            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
+            part[l] = s;                                                                           \
             barrier(CLK_LOCAL_MEM_FENCE);                                                          \
             for (uint off = 1u; off < g; off *= 2u) {                                              \
                 T y = l >= off ? part[l - off] : (T)(0);                                           \
@@ -178,9 +214,29 @@ inline void scan_group_range_(uint n, uint chunk, uint *begin, uint *end)
                 barrier(CLK_LOCAL_MEM_FENCE);                                                      \
             }                                                                                      \
             /* exclusive from the lane before (p - x is not exact for floats) */                   \
-            T p = inclusive ? part[l] : (l ? part[l - 1u] : (T)(0)), total = part[g - 1u];         \
-            if (i < end)                                                                           \
-                out[i] = carry + p;                                                                \
+            T e = l ? part[l - 1u] : (T)(0), total = part[g - 1u];                                 \
+            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
+            for (uint k = 0; k < SCAN_Q_; ++k) {                                                   \
+                part[SCAN_Q_ * l + k] = e;                                                         \
+                e += t[k];                                                                         \
+            }                                                                                      \
+            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
+            for (uint q = 0; q < SCAN_Q_; ++q) {                                                   \
+                uint i = base + 4u * (q * g + l);                                                  \
+                T o = carry + part[q * g + l];                                                     \
+                T##4 r = inclusive ? v[q] : (T##4)((T)(0), v[q].s0, v[q].s1, v[q].s2);             \
+                r += (T##4)(o);                                                                    \
+                if (i + 4u <= end) {                                                               \
+                    *(global T##4 *)(out + i) = r;                                                 \
+                } else {                                                                           \
+                    if (i < end)                                                                   \
+                        out[i] = r.s0;                                                             \
+                    if (i + 1u < end)                                                              \
+                        out[i + 1u] = r.s1;                                                        \
+                    if (i + 2u < end)                                                              \
+                        out[i + 2u] = r.s2;                                                        \
+                }                                                                                  \
+            }                                                                                      \
             carry += total;                                                                        \
             barrier(CLK_LOCAL_MEM_FENCE);                                                          \
         }                                                                                          \

@@ -126,6 +126,7 @@ typedef struct sluice_launch_ {
 typedef struct sluice_state_ {
     uint begin, end; /* the chunk: records begin, begin + step, ... before end */
     uint step;       /* 1 (contiguous), or the work-group size (interleaved) */
+    uint blk;        /* records per step: 1, or SLUICE_BLOCK (SLUICE_FOR_EACH_BLOCK) */
     uint pass;       /* 0: count, 1: write */
     uint chunk_id;
     uint group;                   /* 1: the group reserves room together (group emission) */
@@ -158,17 +159,26 @@ inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint
             1u + (vars[L->in_var] == SLUICE_VOID_ ? vars[L->in_var + 1u] : L->in_var);
 }
 
-/* The records of this work-item. Contiguous chunks (`range`, or a launch
- * without `interleave`): work-item i takes [i chunk, (i + 1) chunk), the
- * layout for CPUs, where one work-item walking its chunk runs like a C loop.
- * Interleaved (the layout for GPUs, whose work-items run in lockstep groups
- * and read memory together): a work-group takes the same records as its
- * work-items' chunks together, and work-item l of it takes every G-th of
+/* The loop forms (sluice_begin_'s `form`): SLUICE_FOR_EACH, _RANGE, _BLOCK. */
+#define SLUICE_FORM_RECORD_ 0
+#define SLUICE_FORM_RANGE_ 1
+#define SLUICE_FORM_BLOCK_ 2
+
+/* Records per block of SLUICE_FOR_EACH_BLOCK in the interleaved layout. */
+#define SLUICE_BLOCK 4u
+
+/* The records of this work-item. Contiguous chunks (the range form, or a
+ * launch without `interleave`): work-item i takes [i chunk, (i + 1) chunk),
+ * the layout for CPUs, where one work-item walking its chunk runs like a C
+ * loop. Interleaved (the layout for GPUs, whose work-items run in lockstep
+ * groups and read memory together): a work-group takes the same records as
+ * its work-items' chunks together, and work-item l of it takes every G-th of
  * them from the l-th (G the work-group size), so neighbouring work-items
- * read neighbouring records. The host interleaves only launches without
- * ordered outputs, which rely on each chunk being contiguous. */
+ * read neighbouring records; in the block form every G-th block of
+ * SLUICE_BLOCK records from the l-th. The host interleaves only launches
+ * without ordered outputs, which rely on each chunk being contiguous. */
 inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
-                          local uint *lds, const sluice_launch_ *L, int range)
+                          local uint *lds, const sluice_launch_ *L, int form)
 {
     uint n = L->n_fixed;
     if (n == SLUICE_NONE) {
@@ -178,17 +188,23 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
     }
     uint id = (uint)get_global_id(0);
     s->chunk_id = id;
-    if (L->interleave && !range) {
+    const int inter = L->interleave && form != SLUICE_FORM_RANGE_;
+    if (inter) {
         uint l = (uint)get_local_id(0), g = (uint)get_local_size(0);
+        uint w = form == SLUICE_FORM_BLOCK_ ? SLUICE_BLOCK : 1u;
         ulong tile = (ulong)(id - l) * L->chunk;
-        s->begin = (uint)min(tile + l, (ulong)n);
+        s->begin = (uint)min(tile + (ulong)w * l, (ulong)n);
         s->end = (uint)min(tile + (ulong)g * L->chunk, (ulong)n);
-        s->step = g;
+        s->step = w * g;
+        s->blk = w;
     } else {
         ulong b = (ulong)id * L->chunk;
         s->begin = (uint)min(b, (ulong)n);
         s->end = (uint)min(b + L->chunk, (ulong)n);
         s->step = 1u;
+        s->blk = 1u;
+        if (form == SLUICE_FORM_BLOCK_) /* one block: the whole chunk */
+            s->step = s->blk = max(s->end - s->begin, 1u);
     }
     s->pass = L->first_pass;
     s->lds = lds;
@@ -196,7 +212,7 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
 #ifdef SLUICE_GROUP_EMIT_
     /* interleaved with outputs (all unordered, mode 0): the same for the
      * whole launch, so the whole group takes the barrier or none does */
-    if (s->step > 1u && L->out_mask != 0u) {
+    if (inter && L->out_mask != 0u) {
         s->group = 1u;
         if (get_local_id(0) == 0)
             for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
@@ -292,8 +308,12 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
             if (s->ctr[c])
                 atomic_add(&vars[L->counter_var + c], s->ctr[c]);
         if (L->prof_var != SLUICE_NONE) {
-            if (s->end > s->begin)
-                atomic_add(&vars[L->prof_var], (s->end - s->begin + s->step - 1u) / s->step);
+            if (s->end > s->begin) {
+                /* steps of blk records each, the last one cut at the end */
+                uint steps = (s->end - s->begin + s->step - 1u) / s->step;
+                uint last = s->begin + (steps - 1u) * s->step;
+                atomic_add(&vars[L->prof_var], (steps - 1u) * s->blk + min(s->blk, s->end - last));
+            }
             for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
                 if (s->cnt[k])
                     atomic_add(&vars[L->prof_var + 1 + k], s->cnt[k]);
@@ -316,7 +336,8 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
  * SLUICE_FOR_EACH_RANGE. */
 #define SLUICE_FOR_EACH(id)                                                                        \
     sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_, 0);          \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_,              \
+                  SLUICE_FORM_RECORD_);                                                            \
     for (; sluice_s_.pass < 2u;                                                                    \
          sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
         for (uint id = sluice_s_.begin; id < sluice_s_.end; id += sluice_s_.step)
@@ -329,11 +350,32 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
  * it too, e.g. for a tail of fewer than 16 records. */
 #define SLUICE_FOR_EACH_RANGE(b, e)                                                                \
     sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_, 1);          \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_,              \
+                  SLUICE_FORM_RANGE_);                                                             \
     for (; sluice_s_.pass < 2u;                                                                    \
          sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
         for (uint b = sluice_s_.begin, e = sluice_s_.end, sluice_once_ = 1u; sluice_once_;         \
              sluice_once_ = 0u)
+
+/* The block form of SLUICE_FOR_EACH, for bodies that take a few records at a
+ * time as one vector on GPUs: the body runs on blocks of consecutive
+ * records [b, e) of this work-item, in increasing order. In the interleaved
+ * layout (GPUs) a block holds SLUICE_BLOCK (4) records, fewer at the end of
+ * the input, and the blocks of a work-group's work-items lie side by side,
+ * so that their vector loads are coalesced; b is then a multiple of 4 when
+ * the work-group size is (a block of 4-byte records starts on a 16-byte
+ * boundary). Elsewhere the body runs once per pass on the whole chunk, as
+ * in SLUICE_FOR_EACH_RANGE. A body loops over [b, e) itself and handles any
+ * length; SLUICE_EMIT4 emits 4 records from a vector. The rules above hold
+ * per record. */
+#define SLUICE_FOR_EACH_BLOCK(b, e)                                                                \
+    sluice_state_ sluice_s_;                                                                       \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_,              \
+                  SLUICE_FORM_BLOCK_);                                                             \
+    for (; sluice_s_.pass < 2u;                                                                    \
+         sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
+        for (uint b = sluice_s_.begin, e = min(b + sluice_s_.blk, sluice_s_.end);                  \
+             b < sluice_s_.end; b += sluice_s_.step, e = min(b + sluice_s_.blk, sluice_s_.end))
 
 /* True in the pass that writes (always true for kernels without conditional
  * outputs). Guard mapped writes with it to avoid doing them twice. */
@@ -383,6 +425,53 @@ inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
 /* Emits `value` to conditional output `slot` unconditionally. A body may emit
  * several records per input (a bounded number) by emitting several times. */
 #define SLUICE_EMIT(slot, buf, value) SLUICE_EMIT_IF(slot, buf, value, 1)
+
+/* Emits the lanes of `x` (a uint4) whose bit is set in `m` (bits 0-3) to
+ * conditional output `slot` (records of 32-bit words in `buf`), in lane
+ * order, taking their places at once: in group emission one local atomic
+ * for the 4 records instead of one each. */
+inline void sluice_emit4_(sluice_state_ *s, uint slot, global uint *buf, uint4 x, uint m)
+{
+    m &= 15u;
+    uint k = popcount(m);
+    if (s->pass == 0u) {
+        s->cnt[slot] += k;
+        return;
+    }
+    if (!k)
+        return;
+    uint p = s->pos[slot], lim = s->lim[slot];
+#ifdef SLUICE_GROUP_EMIT_
+    if (s->group)
+        p += atomic_add(&s->lds[slot], k);
+    else
+#endif
+        s->pos[slot] = p + k;
+    if (m & 1u) {
+        if (p < lim)
+            buf[p] = x.s0;
+        ++p;
+    }
+    if (m & 2u) {
+        if (p < lim)
+            buf[p] = x.s1;
+        ++p;
+    }
+    if (m & 4u) {
+        if (p < lim)
+            buf[p] = x.s2;
+        ++p;
+    }
+    if ((m & 8u) && p < lim)
+        buf[p] = x.s3;
+}
+#define SLUICE_EMIT4(slot, buf, x, m) sluice_emit4_(&sluice_s_, (slot), (buf), (x), (m))
+
+/* The 4-bit mask of an int4 comparison's true lanes (-1), for SLUICE_EMIT4. */
+inline uint sluice_mask4(int4 c)
+{
+    return ((uint)c.s0 & 1u) | ((uint)c.s1 & 2u) | ((uint)c.s2 & 4u) | ((uint)c.s3 & 8u);
+}
 
 /* Block emission: 16 records at a time, selected by a 16-bit mask.
  *
@@ -550,17 +639,38 @@ typedef float16 sluice_float16_unaligned_ __attribute__((aligned(4)));
         (result) = r_;                                                                             \
     } while (0)
 
-/* Reduces in[begin..end) (a global T array) with OP (SLUICE_ADD_ ...) by one
- * work-group: work-item l reads in[begin + l], in[begin + l + g], ... (g the
- * group size, a power of two), so neighbouring work-items read neighbouring
- * records, then the group combines its g values in a tree in `part` (local
- * memory for g T). The result is in part[0]. Every work-item of the group
- * must reach it (it has barriers). */
+/* Reduces in[begin..end) (a global T array, T uint or float) with OP
+ * (SLUICE_ADD_ ...) by one work-group, the group's work-items reading
+ * neighbouring records, then the group combines its g values (g the group
+ * size, a power of two) in a tree in `part` (local memory for g T). The
+ * result is in part[0]. Every work-item of the group must reach it (it has
+ * barriers). Where `begin` is a multiple of 4 (16 bytes), work-item l reads
+ * the 4 records at begin + 4 l, begin + 4 (l + g), ... as one vector, two
+ * vectors per step: a GPU keeps a load in flight per outstanding vector of
+ * a work-item, and one 4-byte load per work-item at a time moved about half
+ * an H100's bandwidth (bench/README.md). The rest go one record per
+ * work-item. */
 #define SLUICE_GROUP_REDUCE_(T, in, begin, end, identity, OP, part)                                \
     do {                                                                                           \
         uint l_ = (uint)get_local_id(0), g_ = (uint)get_local_size(0);                             \
+        uint b_ = (begin), e_ = (end);                                                             \
         T r_ = (T)(identity);                                                                      \
-        for (uint i_ = (begin) + l_; i_ < (end); i_ += g_) {                                       \
+        if ((b_ & 3u) == 0u) {                                                                     \
+            T##4 a_ = (T##4)(identity), c_ = a_;                                                   \
+            uint v_ = b_ + ((e_ - b_) & ~3u), i_ = b_ + 4u * l_;                                   \
+            for (; i_ + 4u * g_ < v_; i_ += 8u * g_) {                                             \
+                T##4 x_ = *(global const T##4 *)((in) + i_);                                       \
+                T##4 y_ = *(global const T##4 *)((in) + i_ + 4u * g_);                             \
+                a_ = OP(a_, x_);                                                                   \
+                c_ = OP(c_, y_);                                                                   \
+            }                                                                                      \
+            if (i_ < v_)                                                                           \
+                a_ = OP(a_, *(global const T##4 *)((in) + i_));                                    \
+            a_ = OP(a_, c_);                                                                       \
+            r_ = OP(OP(a_.s0, a_.s1), OP(a_.s2, a_.s3));                                           \
+            b_ = v_;                                                                               \
+        }                                                                                          \
+        for (uint i_ = b_ + l_; i_ < e_; i_ += g_) {                                               \
             T x_ = (in)[i_];                                                                       \
             r_ = OP(r_, x_);                                                                       \
         }                                                                                          \
@@ -568,8 +678,8 @@ typedef float16 sluice_float16_unaligned_ __attribute__((aligned(4)));
         barrier(CLK_LOCAL_MEM_FENCE);                                                              \
         for (uint h_ = g_ / 2u; h_ > 0u; h_ /= 2u) {                                               \
             if (l_ < h_) {                                                                         \
-                T a_ = (part)[l_], b_ = (part)[l_ + h_];                                           \
-                (part)[l_] = OP(a_, b_);                                                           \
+                T p_ = (part)[l_], q_ = (part)[l_ + h_];                                           \
+                (part)[l_] = OP(p_, q_);                                                           \
             }                                                                                      \
             barrier(CLK_LOCAL_MEM_FENCE);                                                          \
         }                                                                                          \

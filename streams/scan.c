@@ -11,6 +11,9 @@
 
 /* Work-items per work-group of the scan launches. */
 #define SCAN_LOCAL 8u
+/* Vectors of 4 records per work-item in a round of the GPU layout's pass 3
+ * (SCAN_Q_ in kernels/scan.cl): its local memory holds one sum per vector. */
+#define SCAN_Q 4u
 
 /* Records per chunk for an input of at most `bound` records: about
  * sqrt(bound) records (at least 1024, a multiple of 64), so that there are a
@@ -168,7 +171,7 @@ sluice_status sluice_scan(sluice_context *ctx, sluice_stream *in, sluice_stream 
         sl_set_arg(k[2], 7, sizeof(cl_mem), &sums, &err);
         sl_set_arg(k[2], 8, sizeof(cl_uint), &incl, &err);
         if (si.group > 1)
-            sl_set_arg(k[2], 9, part, NULL, &err);
+            sl_set_arg(k[2], 9, SCAN_Q * si.group * 4, NULL, &err);
         if (err != CL_SUCCESS)
             st = sl_cl_fail(ctx, err, "sluice_scan: setting kernel arguments");
     }

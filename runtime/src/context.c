@@ -167,6 +167,8 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
         opt.no_simd = 1;
     if (env_on("SLUICE_VERBOSE"))
         opt.verbose = 1;
+    if (!opt.build_options)
+        opt.build_options = getenv("SLUICE_BUILD_OPTIONS");
     const char *chunk_env = getenv("SLUICE_CHUNK");
     if (!opt.chunk && chunk_env && *chunk_env) {
         char *end;
@@ -224,6 +226,12 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     ctx->prof_epoch = 1;
     ctx->no_simd = opt.no_simd;
     ctx->verbose = opt.verbose;
+    ctx->build_options = sl_strdup(opt.build_options ? opt.build_options : "");
+    if (!ctx->build_options) {
+        free(ctx);
+        set_msg(error, error_size, "out of host memory");
+        return SLUICE_ERROR_OUT_OF_MEMORY;
+    }
     ctx->chunk = opt.chunk;
     ctx->layout = opt.layout != SLUICE_LAYOUT_AUTO ? (int)opt.layout
                   : ctx->info.is_cpu               ? SLUICE_LAYOUT_CONTIGUOUS
@@ -274,6 +282,7 @@ void sluice_context_destroy(sluice_context *ctx)
     if (ctx->queue)
         clFinish(ctx->queue);
     sl_profile_free(ctx);
+    free(ctx->build_options);
     if (ctx->scan_kernel)
         clReleaseKernel(ctx->scan_kernel);
     if (ctx->map_length_kernel)

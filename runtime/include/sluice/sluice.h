@@ -150,6 +150,11 @@ typedef struct sluice_context_options {
      *  by SLUICE_LAYOUT=contiguous or SLUICE_LAYOUT=interleaved, e.g. to
      *  test the GPU layout on a CPU. */
     sluice_layout layout;
+    /** Options appended to every program build (NULL: none), e.g.
+     *  "-cl-nv-verbose", with which NVIDIA's build log (printed with
+     *  `verbose`) gives each kernel's registers and spills. Also set by
+     *  SLUICE_BUILD_OPTIONS. */
+    const char *build_options;
 } sluice_context_options;
 
 typedef struct sluice_context sluice_context;
