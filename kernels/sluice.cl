@@ -32,12 +32,14 @@
  * On a GPU (the runtime's interleaved layout, sluice_layout in sluice.h)
  * the work-items of a group take the records of their chunks together, one
  * in every G (the group size) each, so that neighbouring work-items read
- * neighbouring records; launches with ordered outputs, and bodies written
- * with SLUICE_FOR_EACH_RANGE, keep a contiguous chunk per work-item. There
- * the work-group also reserves room together (SLUICE_GROUP_EMIT_ below): one
- * global atomic per group and output, and each record's place taken from a
- * counter in local memory, so that the records a group's work-items emit
- * side by side land side by side.
+ * neighbouring records; bodies written with SLUICE_FOR_EACH_RANGE keep a
+ * contiguous chunk per work-item. There the work-group also reserves room
+ * together (SLUICE_GROUP_EMIT_ below): one global atomic per group and
+ * output, and each record's place taken from a counter in local memory, so
+ * that the records a group's work-items emit side by side land side by
+ * side. Ordered outputs are placed by the group too (group order, below):
+ * the host scans one count per group, and the group walks its records in
+ * steps, each counted, scanned across the group and then written.
  *
  * Rules for a body that emits:
  *   - It runs twice per record (count pass, write pass) and must emit the same
@@ -127,7 +129,10 @@ typedef struct sluice_state_ {
     uint begin, end; /* the chunk: records begin, begin + step, ... before end */
     uint step;       /* 1 (contiguous), or the work-group size (interleaved) */
     uint blk;        /* records per step: 1, or SLUICE_BLOCK (SLUICE_FOR_EACH_BLOCK) */
-    uint pass;       /* 0: count, 1: write */
+    uint uend;       /* the loop's end: `end`, or past it where the group steps together */
+    uint pass;       /* 0: count, 1: write, 3: a step's count (group order, below) */
+    uint omask;      /* ordered outputs placed by the group (group order), else 0 */
+    uint stepped;    /* 1: their places come from a scan per step (not a range's) */
     uint chunk_id;
     uint group;                   /* 1: the group reserves room together (group emission) */
     local uint *lds;              /* its cursors, starts and ends (SLUICE_LDS_WORDS_) */
@@ -159,6 +164,109 @@ inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint
             1u + (vars[L->in_var] == SLUICE_VOID_ ? vars[L->in_var + 1u] : L->in_var);
 }
 
+/* Group order: ordered outputs in the interleaved layout (GPUs). The
+ * work-group owns its work-items' records together (a tile of G chunks):
+ * the count launch adds the group's counts (sluice_group_counts_), the
+ * host scans one count per group, and the write launch places each record
+ * in input order within the group's room. In SLUICE_FOR_EACH and _BLOCK,
+ * whose work-items take the tile's records side by side, the group walks
+ * the tile in steps (one record or block per work-item) and runs each step
+ * twice: first counting what each work-item emits to the ordered outputs
+ * (pass 3), then, after a scan of those counts across the group
+ * (sluice_group_scan_), writing them (pass 1). A range (SLUICE_FOR_EACH_
+ * RANGE) keeps a contiguous chunk per work-item: its write launch counts
+ * again and one scan across the group places each work-item's records. */
+
+/* The places of a work-item's records in the group's room, for all
+ * outputs at once (the lanes of a uint8: outputs 0-7, so that no barrier
+ * sits under a condition on which outputs are ordered): the group's next
+ * places (*at, 8 words of local memory) plus the exclusive scan of x across
+ * the group; *at moves past them all. In two levels, with four barriers and
+ * none in a loop (PoCL's compile time grows with barriers in loops): 16
+ * work-items scan a 16th of the group each, then one scans their sums. `t`
+ * is local memory for 8 (G + 16) words (G the group size). Every work-item
+ * of the group must reach it. */
+#define SLUICE_SCAN_SEGMENTS_ 16u
+inline uint8 sluice_group_place_(local uint *t, uint8 x, local uint *at)
+{
+    uint l = (uint)get_local_id(0), g = (uint)get_local_size(0);
+    uint segs = min(g, SLUICE_SCAN_SEGMENTS_), seg = (g + segs - 1u) / segs;
+    vstore8(x, l, t);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (l < segs) { /* its segment's exclusive scan in place, its sum after the group's */
+        uint8 acc = (uint8)(0u);
+        for (uint i = l * seg; i < min(l * seg + seg, g); ++i) {
+            uint8 v = vload8(i, t);
+            vstore8(acc, i, t);
+            acc += v;
+        }
+        vstore8(acc, g + l, t);
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (l == 0u) { /* the segments' starts, from the group's next places */
+        uint8 acc = vload8(0, at);
+        for (uint j = 0; j < segs; ++j) {
+            uint8 v = vload8(g + j, t);
+            vstore8(acc, g + j, t);
+            acc += v;
+        }
+        vstore8(acc, 0, at);
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    uint8 r = vload8(l, t) + vload8(g + l / seg, t);
+    barrier(CLK_LOCAL_MEM_FENCE); /* t is read before the next scan writes it */
+    return r;
+}
+
+/* sluice_group_place_ for the ordered outputs the group places, of the
+ * counts cnt - from (from NULL: cnt): their places. */
+inline uint8 sluice_group_places_(sluice_state_ *s, const uint *from)
+{
+    uint8 x;
+    uint *xs = (uint *)&x;
+    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+        xs[k] = (s->omask >> k) & 1u ? s->cnt[k] - (from ? from[k] : 0u) : 0u;
+    return sluice_group_place_(s->lds + SLUICE_LDS_WORDS_, x, s->lds + SLUICE_MAX_OUTPUTS);
+}
+
+/* Into the write pass: where the group steps, into a step's count first;
+ * its counts start from the marks in pos (the count pass's are dropped). */
+inline void sluice_enter_write_(sluice_state_ *s)
+{
+    s->pass = 1u;
+    if (!s->stepped || s->begin >= s->uend)
+        return;
+    s->pass = 3u;
+    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+        if ((s->omask >> k) & 1u)
+            s->pos[k] = s->cnt[k] = 0u;
+}
+
+/* Between a step's count and its writing: each ordered output's places for
+ * this step, after the group's earlier steps (sluice_group_place_). */
+inline void sluice_step_places_(sluice_state_ *s)
+{
+    uint8 p = sluice_group_places_(s, s->pos);
+    const uint *ps = (const uint *)&p;
+    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+        if ((s->omask >> k) & 1u)
+            s->pos[k] = ps[k];
+}
+
+/* A range's places in group order, after its count pass: each work-item's
+ * records after those of the work-items before it in the group. */
+inline void sluice_range_places_(sluice_state_ *s)
+{
+    uint8 p = sluice_group_places_(s, 0);
+    const uint *ps = (const uint *)&p;
+    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+        if (!((s->omask >> k) & 1u) || s->stepped)
+            continue;
+        s->lim[k] = (uint)min((ulong)ps[k] + s->cnt[k], (ulong)s->lim[k]);
+        s->pos[k] = ps[k];
+    }
+}
+
 /* The loop forms (sluice_begin_'s `form`): SLUICE_FOR_EACH, _RANGE, _BLOCK. */
 #define SLUICE_FORM_RECORD_ 0
 #define SLUICE_FORM_RANGE_ 1
@@ -175,8 +283,8 @@ inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint
  * its work-items' chunks together, and work-item l of it takes every G-th of
  * them from the l-th (G the work-group size), so neighbouring work-items
  * read neighbouring records; in the block form every G-th block of
- * SLUICE_BLOCK records from the l-th. The host interleaves only launches
- * without ordered outputs, which rely on each chunk being contiguous. */
+ * SLUICE_BLOCK records from the l-th. Ordered outputs are then placed in
+ * group order (above). */
 inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
                           local uint *lds, const sluice_launch_ *L, int form)
 {
@@ -206,17 +314,38 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
         if (form == SLUICE_FORM_BLOCK_) /* one block: the whole chunk */
             s->step = s->blk = max(s->end - s->begin, 1u);
     }
+    s->uend = s->end;
     s->pass = L->first_pass;
     s->lds = lds;
     s->group = 0u;
+    s->omask = 0u;
+    s->stepped = 0u;
+    /* the row of scanned counts this work-item reads: its chunk's, or in
+     * group order its group's */
+    uint row = id;
 #ifdef SLUICE_GROUP_EMIT_
-    /* interleaved with outputs (all unordered, mode 0): the same for the
-     * whole launch, so the whole group takes the barrier or none does */
-    if (inter && L->out_mask != 0u) {
+    /* The interleaved layout with outputs: the same for the whole launch,
+     * so the whole group takes the barriers or none does. */
+    if (L->interleave && L->out_mask != 0u) {
         s->group = 1u;
+        row = (uint)get_group_id(0);
+        if (L->mode == 2u) {
+            s->omask = L->ordered_mask;
+            s->stepped = form != SLUICE_FORM_RANGE_;
+        }
+        if (s->stepped) {
+            /* every work-item of the group takes the same number of steps */
+            uint steps = (L->chunk + s->blk - 1u) / s->blk;
+            s->uend = (uint)min((ulong)s->begin + (ulong)steps * s->step, (ulong)0xffffffffu);
+            if (!(L->out_mask & ~L->ordered_mask)) /* nothing to reserve: no count pass */
+                s->pass = 1u;
+        }
         if (get_local_id(0) == 0)
-            for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+            for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
                 lds[k] = 0u;
+                if ((s->omask >> k) & 1u) /* the group's next place */
+                    lds[SLUICE_MAX_OUTPUTS + k] = scratch[k * L->stride + row];
+            }
         barrier(CLK_LOCAL_MEM_FENCE);
     }
 #endif
@@ -226,12 +355,14 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
         s->lim[k] = 0;
         if (L->mode == 2 && ((L->ordered_mask >> k) & 1u)) {
             /* Write launch of an ordered output: offsets were scanned. */
-            uint a = scratch[k * L->stride + id], e = scratch[k * L->stride + id + 1];
+            uint a = scratch[k * L->stride + row], e = scratch[k * L->stride + row + 1];
             s->cnt[k] = L->first_pass ? e - a : 0u; /* else recounted in pass 0 */
             s->pos[k] = a;
             s->lim[k] = min(e, L->out_cap[k]);
         }
     }
+    if (s->pass == 1u)
+        sluice_enter_write_(s);
     for (uint c = 0; c < SLUICE_MAX_COUNTERS; ++c)
         s->ctr[c] = 0;
 }
@@ -253,33 +384,54 @@ inline uint sluice_reserve_(global uint *vars, const sluice_launch_ *L, uint k, 
 }
 
 /* Group emission's reservation, between the passes: the group's counts,
- * one global atomic per output for all of them, then every work-item reads
- * the group's start and end. */
-inline void sluice_group_reserve_(sluice_state_ *s, global uint *vars, const sluice_launch_ *L)
+ * one global atomic per unordered output for all of them, then every
+ * work-item reads the group's start and end. In a count launch (group
+ * order) the group's counts of its ordered outputs go to the scratch row
+ * of the group instead, and in a range's write launch each work-item takes
+ * its places of them (sluice_range_places_). */
+inline void sluice_group_reserve_(sluice_state_ *s, global uint *vars, global uint *scratch,
+                                  const sluice_launch_ *L)
 {
 #ifdef SLUICE_GROUP_EMIT_
     local uint *lds = s->lds;
+    /* the counts this adds up: a count launch's ordered outputs, or the
+     * unordered outputs room is reserved for */
+    const uint mine = L->mode == 1u ? L->ordered_mask : L->out_mask & ~s->omask;
     for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
-        if (s->cnt[k])
+        if (((mine >> k) & 1u) && s->cnt[k])
             atomic_add(&lds[k], s->cnt[k]);
     barrier(CLK_LOCAL_MEM_FENCE);
     if (get_local_id(0) == 0) {
         for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+            if (!((mine >> k) & 1u))
+                continue;
+            if (L->mode == 1u) {
+                scratch[k * L->stride + get_group_id(0)] = lds[k];
+                continue;
+            }
             uint lim = 0u;
-            lds[SLUICE_MAX_OUTPUTS + k] =
-                (L->out_mask >> k) & 1u ? sluice_reserve_(vars, L, k, lds[k], &lim) : 0u;
+            lds[SLUICE_MAX_OUTPUTS + k] = sluice_reserve_(vars, L, k, lds[k], &lim);
             lds[2 * SLUICE_MAX_OUTPUTS + k] = lim;
             lds[k] = 0u;
         }
     }
     barrier(CLK_LOCAL_MEM_FENCE);
+    if (L->mode == 1u)
+        return;
     for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
-        s->pos[k] = lds[SLUICE_MAX_OUTPUTS + k];
-        s->lim[k] = lds[2 * SLUICE_MAX_OUTPUTS + k];
+        if ((mine >> k) & 1u) {
+            s->pos[k] = lds[SLUICE_MAX_OUTPUTS + k];
+            s->lim[k] = lds[2 * SLUICE_MAX_OUTPUTS + k];
+        }
     }
+    /* taken by every work-item in a write launch (no barrier under a
+     * condition on the form); a stepping group's places come per step */
+    if (L->mode == 2u)
+        sluice_range_places_(s);
 #else
     (void)s;
     (void)vars;
+    (void)scratch;
     (void)L;
 #endif
 }
@@ -289,7 +441,7 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
                          const sluice_launch_ *L)
 {
     if (s->pass == 0 && s->group) {
-        sluice_group_reserve_(s, vars, L);
+        sluice_group_reserve_(s, vars, scratch, L);
     } else if (s->pass == 0) {
         for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
             if (!((L->out_mask >> k) & 1u))
@@ -319,7 +471,12 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
                     atomic_add(&vars[L->prof_var + 1 + k], s->cnt[k]);
         }
     }
-    s->pass = (L->mode == 1) ? 2u : s->pass + 1u;
+    if (L->mode == 1)
+        s->pass = 2u;
+    else if (s->pass == 0u)
+        sluice_enter_write_(s);
+    else
+        s->pass = 2u;
 }
 
 /* The hidden parameters every stream kernel takes first. The host numbers the
@@ -334,13 +491,53 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
  * or count. The records need not be contiguous (on GPUs they are
  * interleaved; see sluice_begin_): a body that needs a contiguous range uses
  * SLUICE_FOR_EACH_RANGE. */
-#define SLUICE_FOR_EACH(id)                                                                        \
+/* The passes of a loop form: the state, then the loop over the passes,
+ * whose body is the loop over the work-item's records. */
+#define SLUICE_PASSES_(form)                                                                       \
     sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_,              \
-                  SLUICE_FORM_RECORD_);                                                            \
-    for (; sluice_s_.pass < 2u;                                                                    \
-         sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
-        for (uint id = sluice_s_.begin; id < sluice_s_.end; id += sluice_s_.step)
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_, form);       \
+    for (; sluice_s_.pass != 2u;                                                                   \
+         sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))
+
+/* The next record (or block) of the loop, from `id`. In group order the
+ * group walks its tile in steps, each taken twice: a step's count, the
+ * scan (sluice_step_places_), then the same records again to write them. */
+inline uint sluice_advance_(sluice_state_ *s, uint id)
+{
+#ifdef SLUICE_GROUP_EMIT_
+    if (s->pass == 3u) {
+        sluice_step_places_(s);
+        s->pass = 1u;
+        return id;
+    }
+    if (s->pass == 1u && s->stepped) {
+        uint next = id + s->step;
+        next = next < id ? 0xffffffffu : next;
+        if (next < s->uend) {
+            for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+                if ((s->omask >> k) & 1u)
+                    s->pos[k] = s->cnt[k]; /* the next step counts from here */
+            s->pass = 3u;
+        }
+        return next;
+    }
+#endif
+    return id + s->step;
+}
+
+#ifdef SLUICE_GROUP_EMIT_
+/* The interleaved layout's loops run to `uend`, the same number of steps
+ * for every work-item of a group in group order, and skip what lies past
+ * `end`. */
+#define SLUICE_FOR_EACH(id)                                                                        \
+    SLUICE_PASSES_(SLUICE_FORM_RECORD_)                                                            \
+    for (uint id = sluice_s_.begin; id < sluice_s_.uend; id = sluice_advance_(&sluice_s_, id))     \
+        if (id < sluice_s_.end)
+#else
+#define SLUICE_FOR_EACH(id)                                                                        \
+    SLUICE_PASSES_(SLUICE_FORM_RECORD_)                                                            \
+    for (uint id = sluice_s_.begin; id < sluice_s_.end; id += sluice_s_.step)
+#endif
 
 /* The range form of SLUICE_FOR_EACH, for bodies that handle records in
  * blocks (vector loads, SLUICE_EMIT16): the body runs once per pass with this
@@ -349,13 +546,9 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
  * records. The per-record macros (SLUICE_EMIT_IF, SLUICE_COUNT) work inside
  * it too, e.g. for a tail of fewer than 16 records. */
 #define SLUICE_FOR_EACH_RANGE(b, e)                                                                \
-    sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_,              \
-                  SLUICE_FORM_RANGE_);                                                             \
-    for (; sluice_s_.pass < 2u;                                                                    \
-         sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
-        for (uint b = sluice_s_.begin, e = sluice_s_.end, sluice_once_ = 1u; sluice_once_;         \
-             sluice_once_ = 0u)
+    SLUICE_PASSES_(SLUICE_FORM_RANGE_)                                                             \
+    for (uint b = sluice_s_.begin, e = sluice_s_.end, sluice_once_ = 1u; sluice_once_;             \
+         sluice_once_ = 0u)
 
 /* The block form of SLUICE_FOR_EACH, for bodies that take a few records at a
  * time as one vector on GPUs: the body runs on blocks of consecutive
@@ -369,13 +562,10 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
  * length; SLUICE_EMIT4 emits 4 records from a vector. The rules above hold
  * per record. */
 #define SLUICE_FOR_EACH_BLOCK(b, e)                                                                \
-    sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_,              \
-                  SLUICE_FORM_BLOCK_);                                                             \
-    for (; sluice_s_.pass < 2u;                                                                    \
-         sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))                      \
-        for (uint b = sluice_s_.begin, e = min(b + sluice_s_.blk, sluice_s_.end);                  \
-             b < sluice_s_.end; b += sluice_s_.step, e = min(b + sluice_s_.blk, sluice_s_.end))
+    SLUICE_PASSES_(SLUICE_FORM_BLOCK_)                                                             \
+    for (uint b = sluice_s_.begin, e = min(b + sluice_s_.blk, sluice_s_.end); b < sluice_s_.uend;  \
+         b = sluice_advance_(&sluice_s_, b), e = min(b + sluice_s_.blk, sluice_s_.end))            \
+        if (b < sluice_s_.end)
 
 /* True in the pass that writes (always true for kernels without conditional
  * outputs). Guard mapped writes with it to avoid doing them twice. */
@@ -387,21 +577,40 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
  * false, or in the count pass, it is a slot that a later record of the same
  * chunk overwrites or the stream's spare record past its capacity. Use this
  * for records written field by field. */
+/* In the count passes counts c records of output `slot` and returns 1: in
+ * pass 0 every output's, in a step's count (pass 3, group order) only
+ * those of the ordered outputs the group places. */
+inline int sluice_counting_(sluice_state_ *s, uint slot, uint c)
+{
+#ifdef SLUICE_GROUP_EMIT_
+    if (s->pass == 1u)
+        return 0;
+    if (s->pass == 0u || ((s->omask >> slot) & 1u))
+        s->cnt[slot] += c;
+    return 1;
+#else /* no group order: passes 0 and 1 only */
+    if (s->pass != 0u)
+        return 0;
+    s->cnt[slot] += c;
+    return 1;
+#endif
+}
+
 inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
 {
-    if (s->pass == 0u) {
-        s->cnt[slot] += c;
+    if (sluice_counting_(s, slot, c))
         return cap;
-    }
 #ifdef SLUICE_GROUP_EMIT_
     if (s->group) {
-        /* the next place of the group's room; nothing written is a place
-         * another work-item's record may take, so an unemitted record goes
-         * to the spare one */
+        /* nothing written is a place another work-item's record may take,
+         * so an unemitted record goes to the spare one */
         if (!c)
             return cap;
-        uint p = s->pos[slot] + atomic_inc(&s->lds[slot]);
-        return p < s->lim[slot] ? p : cap;
+        if (!((s->omask >> slot) & 1u)) { /* the next place of the group's room */
+            uint p = s->pos[slot] + atomic_inc(&s->lds[slot]);
+            return p < s->lim[slot] ? p : cap;
+        }
+        /* group order: this work-item's own next place, as below */
     }
 #endif
     uint p = s->pos[slot];
@@ -434,15 +643,11 @@ inline void sluice_emit4_(sluice_state_ *s, uint slot, global uint *buf, uint4 x
 {
     m &= 15u;
     uint k = popcount(m);
-    if (s->pass == 0u) {
-        s->cnt[slot] += k;
-        return;
-    }
-    if (!k)
+    if (sluice_counting_(s, slot, k) || !k)
         return;
     uint p = s->pos[slot], lim = s->lim[slot];
 #ifdef SLUICE_GROUP_EMIT_
-    if (s->group)
+    if (s->group && !((s->omask >> slot) & 1u))
         p += atomic_add(&s->lds[slot], k);
     else
 #endif
@@ -761,17 +966,20 @@ inline void sluice_emit_lanes_(global uint *buf, const uint16 *x, ushort m, uint
 inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const uint16 *x, ushort m)
 {
     uint k = popcount((uint)m);
-    if (s->pass == 0u) {
-        s->cnt[slot] += k;
+    if (sluice_counting_(s, slot, k))
         return;
-    }
     uint p = s->pos[slot], lim = s->lim[slot];
 #ifdef SLUICE_GROUP_EMIT_
     if (s->group) {
-        /* k places of the group's room, lane by lane: a block store would
-         * reach places that other work-items' records take */
+        /* k places of the group's room (or in group order this work-item's
+         * own), lane by lane: a block store would reach places that other
+         * work-items' records take */
+        if ((s->omask >> slot) & 1u)
+            s->pos[slot] = p + k;
+        else if (k)
+            p += atomic_add(&s->lds[slot], k);
         if (k)
-            sluice_emit_lanes_(buf, x, m, p + atomic_add(&s->lds[slot], k), lim);
+            sluice_emit_lanes_(buf, x, m, p, lim);
         return;
     }
 #endif

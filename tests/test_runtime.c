@@ -54,6 +54,22 @@ static const char *kernels_src =
     "            SLUICE_EMIT_IF(0, out, in[i], in[i] < 100u);\n"
     "    }\n"
     "}\n"
+    /* The README's 4-record blocks (SLUICE_FOR_EACH_BLOCK, SLUICE_EMIT4):
+     * blocks of 4 in the interleaved layout (runtime_gpu, runtime_interleaved),
+     * one chunk elsewhere. */
+    "__kernel void small_values4(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH_BLOCK(b, e) {\n"
+    "        uint i = b;\n"
+    "        if (e - b == 4u && (b & 3u) == 0u) {\n"
+    "            uint4 x = *(global const uint4 *)(in + b);\n"
+    "            SLUICE_EMIT4(0, out, x, sluice_mask4(x < (uint4)100u));\n"
+    "            i = e;\n"
+    "        }\n"
+    "        for (; i < e; ++i)\n"
+    "            SLUICE_EMIT_IF(0, out, in[i], in[i] < 100u);\n"
+    "    }\n"
+    "}\n"
     /* Nine mapped outputs: one more than a launch sets the lengths of. */
     "__kernel void fan9(SLUICE_PARAMS, global const uint *in, global uint *o0,\n"
     "                   global uint *o1, global uint *o2, global uint *o3, global uint *o4,\n"
@@ -386,13 +402,14 @@ static void test_multi_emit(sluice_context *ctx, sluice_program *p, sluice_outpu
     free(got);
 }
 
-/* SLUICE_FOR_EACH_RANGE + SLUICE_EMIT16 against C, on lengths around the
- * 16-record block, both modes. */
-static void test_block_emit(sluice_context *ctx, sluice_program *p)
+/* SLUICE_FOR_EACH_RANGE + SLUICE_EMIT16 and SLUICE_FOR_EACH_BLOCK +
+ * SLUICE_EMIT4 against C, on lengths around the 16- and 4-record blocks,
+ * both modes. */
+static void test_block_emit(sluice_context *ctx, sluice_program *p, const char *kernel)
 {
-    const size_t sizes[] = {0, 1, 15, 16, 17, 1000, 100003};
+    const size_t sizes[] = {0, 1, 3, 4, 5, 15, 16, 17, 1000, 1027, 100003};
     sluice_kernel *k = NULL;
-    CHECK_OK(ctx, sluice_kernel_create(p, "small_values", &k));
+    CHECK_OK(ctx, sluice_kernel_create(p, kernel, &k));
     for (int m = 0; m < 2; ++m) {
         for (size_t si = 0; si < sizeof sizes / sizeof *sizes; ++si) {
             size_t n = sizes[si], rn = 0, len = 0;
@@ -416,7 +433,7 @@ static void test_block_emit(sluice_context *ctx, sluice_program *p)
                 qsort(ref, rn, 4, cmp_u32);
             }
             CHECK(len == rn && (rn == 0 || memcmp(got, ref, rn * 4) == 0),
-                  "block emit n=%zu mode %d: %zu records, want %zu", n, m, len, rn);
+                  "%s n=%zu mode %d: %zu records, want %zu", kernel, n, m, len, rn);
             sluice_stream_destroy(a);
             sluice_stream_destroy(o);
             free(in);
@@ -1070,7 +1087,8 @@ int main(void)
                 test_split(ctx, p, sizes[i], pattern, m ? SLUICE_UNORDERED : SLUICE_ORDERED);
     test_multi_emit(ctx, p, SLUICE_ORDERED);
     test_multi_emit(ctx, p, SLUICE_UNORDERED);
-    test_block_emit(ctx, p);
+    test_block_emit(ctx, p, "small_values");
+    test_block_emit(ctx, p, "small_values4");
     test_loop(ctx, p);
     test_mapped_lengths(ctx, p);
     test_loop_overflow(ctx, p, SLUICE_ORDERED);

@@ -221,18 +221,16 @@ sluice_status sluice_kernel_set_counters(sluice_kernel *k, sluice_counters *coun
  * records (64 KiB of 4-byte records, well inside L2 for the second pass):
  * at 2^24 records that measured 61-62% of copy for split against 54-59% with
  * 4096 (bench_streams --reps 15, two runs each). In the interleaved layout
- * (GPUs) up to 64 records, and up to 256 in launches with ordered outputs:
- * those walk contiguous chunks and one work-group scans their chunk counts,
- * which at 64 records a chunk took longer than the launch itself
- * (bench/README.md, the H100). */
-static size_t choose_chunk(const sluice_context *ctx, size_t bound, int ordered)
+ * (GPUs) up to 64 records: a work-group's tile of 64 chunks, whose ordered
+ * outputs' counts the host scans one per group (group order, sluice.cl). */
+static size_t choose_chunk(const sluice_context *ctx, size_t bound)
 {
     if (ctx->chunk)
         return ctx->chunk;
     size_t lo = 16, hi = 16384, want = bound / 1024;
     if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED) {
-        lo = ordered ? 16 : 1;
-        hi = ordered ? 256 : 64;
+        lo = 1;
+        hi = 64;
         want = bound / 65536;
     }
     return want < lo ? lo : want > hi ? hi : want;
@@ -266,7 +264,13 @@ static sluice_status set_hidden(sluice_kernel *k, const sl_launch *L)
     if (err == CL_SUCCESS)
         err = clSetKernelArg(k->cl, 2, sizeof *L, L);
     if (err == CL_SUCCESS)
-        err = clSetKernelArg(k->cl, 3, SL_LDS_WORDS * sizeof(cl_uint), NULL);
+        /* group order's scans take 8 words per work-item and 16 more after
+         * them (kernels/sluice.cl, sluice_group_place_) */
+        err = clSetKernelArg(
+            k->cl, 3,
+            (SL_LDS_WORDS + (ctx->layout == SLUICE_LAYOUT_INTERLEAVED ? 8 * (k->group + 16) : 0)) *
+                sizeof(cl_uint),
+            NULL);
     return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "setting launch arguments");
 }
 
@@ -370,7 +374,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         else
             any_unordered = 1;
     }
-    size_t chunk = choose_chunk(ctx, bound, L.ordered_mask != 0);
+    size_t chunk = choose_chunk(ctx, bound);
     size_t chunks = (bound + chunk - 1) / chunk;
     size_t global = sl_round_up(chunks ? chunks : 1, k->group);
     L.chunk = (cl_uint)chunk;
@@ -401,7 +405,11 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
             st = sl_scratch_reserve(ctx, rows * L.stride * sizeof(cl_uint));
             if (st != SLUICE_OK)
                 return st;
-            /* Count launch, scan of the chunk counts, write launch. */
+            /* Count launch, scan of the chunk counts, write launch. In the
+             * interleaved layout the work-groups place the records (group
+             * order, sluice.cl): one count per group is scanned. */
+            const int grouped = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
+            L.interleave = grouped;
             L.mode = 1;
             L.first_pass = 0;
             st = set_hidden(k, &L);
@@ -413,7 +421,8 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
             for (unsigned s = 0; st == SLUICE_OK && s < SLUICE_MAX_OUTPUTS; ++s) {
                 if (!((L.ordered_mask >> s) & 1u))
                     continue;
-                cl_uint n = (cl_uint)global, var = L.out_var[s], offset = s * L.stride;
+                cl_uint n = (cl_uint)(grouped ? global / k->group : global), var = L.out_var[s],
+                        offset = s * L.stride;
                 /* one work-item on a CPU (a few thousand counts); on a GPU,
                  * whose single work-item is slow and whose launches have
                  * many more chunks, one work-group */
@@ -428,7 +437,8 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
                                     scan_group, SL_RAW_IO(n, 8)); /* each count read, written */
             }
             L.mode = 2;
-            L.first_pass = any_unordered ? 0 : 1;
+            /* group order counts again where it needs to (sluice_begin_) */
+            L.first_pass = any_unordered || grouped ? 0 : 1;
         } else {
             L.mode = 0;
             L.first_pass = L.out_mask ? 0 : 1;

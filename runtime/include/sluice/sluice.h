@@ -118,9 +118,10 @@ typedef enum sluice_layout {
      *  their unordered outputs together and take each emitted record's
      *  place from a counter in local memory, so records emitted side by side
      *  land side by side (their order within a group is not the input's).
-     *  Ordered outputs and SLUICE_FOR_EACH_RANGE keep contiguous chunks per
-     *  work-item. The chunk counts of ordered outputs are scanned by a
-     *  work-group instead of one work-item. */
+     *  Ordered outputs are placed by the group in input order: one count per
+     *  group is scanned, and the group takes its records in steps, each
+     *  counted, scanned across the group, then written.
+     *  SLUICE_FOR_EACH_RANGE keeps contiguous chunks per work-item. */
     SLUICE_LAYOUT_INTERLEAVED = 2
 } sluice_layout;
 
