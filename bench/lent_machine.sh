@@ -17,7 +17,8 @@
 #   gpu-chunks=LIST  the same in its own layout with SLUICE_CHUNK (records
 #                 per work-item) at each value of LIST -> streams-h100-chunk-N.json
 #   gpu-tests     the suite on the GPU (SLUICE_DEVICE=NVIDIA), less what needs
-#                 OpenImageIO (not carried) or PoCL's own options
+#                 OpenImageIO (not carried) or PoCL's own options;
+#                 gpu-tests=REGEX only the tests REGEX matches (ctest -R)
 #   gpu-raytrace  bench_raytrace on the GPU -> raytrace-h100.json
 #   scaling=LIST  bench/bench_scaling.py on PoCL, threads in LIST's order
 #                 (1 first) -> scaling-xeon16.json, the runs in scaling-runs.tar
@@ -151,8 +152,10 @@ for phase in "$@"; do
                 --out "$OUT/streams-h100-chunk-$c.json"
         done
         ;;
-    gpu-tests)
-        say "the suite on the GPU"
+    gpu-tests | gpu-tests=*)
+        only=""
+        [ "$phase" != gpu-tests ] && only=${phase#gpu-tests=}
+        say "the suite on the GPU${only:+, tests matching $only}"
         mkdir -p /tmp/gpu-tests
         sed -e "s/SLUICE_DEVICE=;/SLUICE_DEVICE=$DEV;/g" -e "s/SLUICE_DEVICE=\")/SLUICE_DEVICE=$DEV\")/g" \
             build/CTestTestfile.cmake >/tmp/gpu-tests/CTestTestfile.cmake
@@ -160,7 +163,7 @@ for phase in "$@"; do
         excl='avx2|portable|^image$|imgdiff|^raytrace|^photonmap|^stress$|^adaptive$|^install$|bench_error_selftest'
         if [ -n "$CTEST" ]; then
             limited 200 "$CTEST" --test-dir /tmp/gpu-tests -j 8 --timeout 180 -E "$excl" \
-                --output-on-failure >"$OUT/gpu-tests.txt" 2>&1
+                ${only:+-R "$only"} --output-on-failure >"$OUT/gpu-tests.txt" 2>&1
             tail -60 "$OUT/gpu-tests.txt"
         else
             say "no ctest on this machine"

@@ -219,13 +219,14 @@ inline uint8 sluice_group_place_(local uint *t, uint8 x, local uint *at)
 }
 
 /* sluice_group_place_ for the ordered outputs the group places, of the
- * counts cnt - from (from NULL: cnt): their places. */
-inline uint8 sluice_group_places_(sluice_state_ *s, const uint *from)
+ * counts cnt - from (from NULL: cnt; none when `none`, which leaves the
+ * group's next places as they are): their places. */
+inline uint8 sluice_group_places_(sluice_state_ *s, const uint *from, uint none)
 {
     uint8 x;
     uint *xs = (uint *)&x;
     for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
-        xs[k] = (s->omask >> k) & 1u ? s->cnt[k] - (from ? from[k] : 0u) : 0u;
+        xs[k] = (s->omask >> k) & 1u && !none ? s->cnt[k] - (from ? from[k] : 0u) : 0u;
     return sluice_group_place_(s->lds + SLUICE_LDS_WORDS_, x, s->lds + SLUICE_MAX_OUTPUTS);
 }
 
@@ -246,7 +247,7 @@ inline void sluice_enter_write_(sluice_state_ *s)
  * this step, after the group's earlier steps (sluice_group_place_). */
 inline void sluice_step_places_(sluice_state_ *s)
 {
-    uint8 p = sluice_group_places_(s, s->pos);
+    uint8 p = sluice_group_places_(s, s->pos, 0u);
     const uint *ps = (const uint *)&p;
     for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
         if ((s->omask >> k) & 1u)
@@ -254,10 +255,12 @@ inline void sluice_step_places_(sluice_state_ *s)
 }
 
 /* A range's places in group order, after its count pass: each work-item's
- * records after those of the work-items before it in the group. */
+ * records after those of the work-items before it in the group. A group
+ * that steps takes part with nothing (its count pass counted for the
+ * unordered outputs; its places come per step). */
 inline void sluice_range_places_(sluice_state_ *s)
 {
-    uint8 p = sluice_group_places_(s, 0);
+    uint8 p = sluice_group_places_(s, 0, s->stepped);
     const uint *ps = (const uint *)&p;
     for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
         if (!((s->omask >> k) & 1u) || s->stepped)
