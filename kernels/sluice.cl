@@ -42,10 +42,11 @@
  * steps, each counted, scanned across the group and then written.
  *
  * Rules for a body that emits:
- *   - It runs twice per record (count pass, write pass) and must emit the same
- *     records both times: it must be deterministic and must not depend on what
- *     it wrote itself. Put heavy work in a kernel without conditional outputs,
- *     or guard other writes with `if (SLUICE_WRITING)`.
+ *   - It runs twice per record (count pass, write pass; three times in group
+ *     order, below) and must emit the same records every time: it must be
+ *     deterministic and must not depend on what it wrote itself. Put heavy
+ *     work in a kernel without conditional outputs, or guard other writes
+ *     with `if (SLUICE_WRITING)`.
  *   - Use `continue` to skip the rest of a record. Never `return` or `break`:
  *     they would skip the reservation and the counter flush. Nor `return`
  *     before SLUICE_FOR_EACH: group emission's barriers (below) need every
