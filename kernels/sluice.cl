@@ -112,17 +112,19 @@ typedef struct sluice_launch_ {
 } sluice_launch_;
 
 /* Group emission (contexts in the interleaved layout: the runtime builds
- * their programs with -DSLUICE_GROUP_EMIT_). In an interleaved launch, whose
- * outputs are all unordered, the 32 work-items of a GPU warp emit their
- * records at the same time, and a chunk's own reserved range per work-item
- * would scatter those 32 stores over 32 ranges. So the group reserves room
- * for its work-items together and hands out places one record at a time
- * from a counter in local memory (sluice_lds_): records emitted side by side
- * land side by side. Local memory per group: a cursor, the reserved start
- * and its end per output (SLUICE_LDS_WORDS_). The barriers are reached by
- * every work-item of the group (the body never returns or breaks), and only
- * in such launches: their conditions are the same for the whole launch.
- * Contexts in the contiguous layout (CPUs) build without any of it. */
+ * their programs with -DSLUICE_GROUP_EMIT_). In an interleaved launch the 32
+ * work-items of a GPU warp emit their records at the same time, and a
+ * chunk's own reserved range per work-item would scatter those 32 stores
+ * over 32 ranges. So for unordered outputs the group reserves room for its
+ * work-items together and hands out places one record at a time from a
+ * counter in local memory (sluice_lds_): records emitted side by side land
+ * side by side; ordered outputs are placed in group order (below). Local
+ * memory per group: a cursor, the reserved start (in group order the next
+ * place) and its end per output (SLUICE_LDS_WORDS_), then group order's scan
+ * (8 (G + 16) words). The barriers are reached by every work-item of the
+ * group (the body never returns or breaks), and only in launches with
+ * outputs: their conditions are the same for the whole launch. Contexts in
+ * the contiguous layout (CPUs) build without any of it. */
 #define SLUICE_LDS_WORDS_ (3 * SLUICE_MAX_OUTPUTS)
 
 /* Per-work-item state of one launch. */
