@@ -169,14 +169,14 @@ inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint
 
 /* Group order: ordered outputs in the interleaved layout (GPUs). The
  * work-group owns its work-items' records together (a tile of G chunks):
- * the count launch adds the group's counts (sluice_group_counts_), the
+ * the count launch adds the group's counts (sluice_group_reserve_), the
  * host scans one count per group, and the write launch places each record
  * in input order within the group's room. In SLUICE_FOR_EACH and _BLOCK,
  * whose work-items take the tile's records side by side, the group walks
  * the tile in steps (one record or block per work-item) and runs each step
  * twice: first counting what each work-item emits to the ordered outputs
  * (pass 3), then, after a scan of those counts across the group
- * (sluice_group_scan_), writing them (pass 1). A range (SLUICE_FOR_EACH_
+ * (sluice_step_places_), writing them (pass 1). A range (SLUICE_FOR_EACH_
  * RANGE) keeps a contiguous chunk per work-item: its write launch counts
  * again and one scan across the group places each work-item's records. */
 
@@ -491,12 +491,6 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
     global uint *sluice_vars_, global uint *sluice_scratch_, const sluice_launch_ sluice_L_,       \
         local uint *sluice_lds_
 
-/* Loops over this work-item's records, with the record index in `id`, in
- * increasing order. The statement (usually a block) that follows is the
- * body. Code before it runs once per work-item; code after it must not emit
- * or count. The records need not be contiguous (on GPUs they are
- * interleaved; see sluice_begin_): a body that needs a contiguous range uses
- * SLUICE_FOR_EACH_RANGE. */
 /* The passes of a loop form: the state, then the loop over the passes,
  * whose body is the loop over the work-item's records. */
 #define SLUICE_PASSES_(form)                                                                       \
@@ -531,6 +525,12 @@ inline uint sluice_advance_(sluice_state_ *s, uint id)
     return id + s->step;
 }
 
+/* Loops over this work-item's records, with the record index in `id`, in
+ * increasing order. The statement (usually a block) that follows is the
+ * body. Code before it runs once per work-item; code after it must not emit
+ * or count. The records need not be contiguous (on GPUs they are
+ * interleaved; see sluice_begin_): a body that needs a contiguous range uses
+ * SLUICE_FOR_EACH_RANGE. */
 #ifdef SLUICE_GROUP_EMIT_
 /* The interleaved layout's loops run to `uend`, the same number of steps
  * for every work-item of a group in group order, and skip what lies past
@@ -577,12 +577,6 @@ inline uint sluice_advance_(sluice_state_ *s, uint id)
  * outputs). Guard mapped writes with it to avoid doing them twice. */
 #define SLUICE_WRITING (sluice_s_.pass == 1u)
 
-/* Reserves the next record of conditional output `slot` when `cond` is true
- * and evaluates to the index to write it at. Write the record there only
- * `if (SLUICE_WRITING)`; the index is always safe to write: when cond is
- * false, or in the count pass, it is a slot that a later record of the same
- * chunk overwrites or the stream's spare record past its capacity. Use this
- * for records written field by field. */
 /* In the count passes counts c records of output `slot` and returns 1: in
  * pass 0 every output's, in a step's count (pass 3, group order) only
  * those of the ordered outputs the group places. */
@@ -602,6 +596,12 @@ inline int sluice_counting_(sluice_state_ *s, uint slot, uint c)
 #endif
 }
 
+/* Reserves the next record of conditional output `slot` when `cond` is true
+ * and evaluates to the index to write it at. Write the record there only
+ * `if (SLUICE_WRITING)`; the index is always safe to write: when cond is
+ * false, or in the count pass, it is a slot that a later record of the same
+ * chunk overwrites or the stream's spare record past its capacity. Use this
+ * for records written field by field. */
 inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
 {
     if (sluice_counting_(s, slot, c))

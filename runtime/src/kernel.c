@@ -396,6 +396,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
     }
 
     sluice_status st = SLUICE_OK;
+    L.interleave = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
     if (queued) {
         if (L.ordered_mask) {
             size_t rows = 0; /* rows up to the highest ordered slot */
@@ -408,8 +409,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
             /* Count launch, scan of the chunk counts, write launch. In the
              * interleaved layout the work-groups place the records (group
              * order, sluice.cl): one count per group is scanned. */
-            const int grouped = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
-            L.interleave = grouped;
+            const int grouped = L.interleave;
             L.mode = 1;
             L.first_pass = 0;
             st = set_hidden(k, &L);
@@ -442,7 +442,6 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         } else {
             L.mode = 0;
             L.first_pass = L.out_mask ? 0 : 1;
-            L.interleave = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
         }
         if (st == SLUICE_OK)
             st = set_hidden(k, &L);
