@@ -26,15 +26,27 @@
 enum { PASS_TRAVERSE = 0, PASS_INTERSECT = 1 };
 
 /* Watched values: the two stream lengths, then the trace counters. */
-enum { W_TRAV = 0, W_ISECT = 1, W_VOXELS = 2, W_TESTS = 3, W_DONE = 4 };
+enum {
+    W_TRAV = 0,
+    W_ISECT = 1,
+    W_VOXELS = 2 + RT_CTR_VOXELS,
+    W_TESTS = 2 + RT_CTR_TESTS,
+    W_ENTERED = 2 + RT_CTR_ENTERED
+};
 
 static unsigned oracle(void *user, unsigned pass, const uint32_t *v, size_t count)
 {
     rt_tracer *t = user;
-    (void)pass;
     (void)count;
     t->stats.voxels += v[W_VOXELS];
     t->stats.tests += v[W_TESTS];
+    /* rt_setup ran the first traverse pass over every ray that entered the
+     * grid: Purcell's pass count has it as one */
+    if (pass == 0 && v[W_ENTERED] > 0) {
+        t->stats.live_fraction_sum += 1.0;
+        t->stats.passes++;
+        t->stats.traverse_passes++;
+    }
     uint64_t live = (uint64_t)v[W_TRAV] + v[W_ISECT];
     if (live == 0)
         return SLUICE_LOOP_STOP;
@@ -116,13 +128,18 @@ static sluice_status prepare(rt_tracer *t, size_t n)
     t->state_capacity = n;
     sluice_output_mode mode = t->opt.ordered ? SLUICE_ORDERED : SLUICE_UNORDERED;
 
-    /* rt_setup(rays, codes, walk, hits, g): rays and hits bound per call */
+    /* rt_setup(rays, codes, walk, hits, maxima, cell_start, g): rays and hits
+     * bound per call */
     sluice_kernel *k = t->k_setup;
     st = sluice_kernel_set_stream(k, 1, t->codes, 1);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 2, t->walk, 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_arg(k, 4, sizeof t->grid_args, &t->grid_args);
+        st = sluice_kernel_set_stream(k, 4, t->maxima, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 5, t->grid.cell_start, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 6, sizeof t->grid_args, &t->grid_args);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_counters(k, t->counters);
 
@@ -160,7 +177,8 @@ static sluice_status prepare(rt_tracer *t, size_t n)
 
     /* rt_route(codes, ids, trav, isect): after a traverse pass into
      * (trav_out, isect_in), after an intersect pass into (trav_in,
-     * isect_out); rt_route_setup(codes, trav) into trav_in */
+     * isect_out); rt_route_setup(codes, trav, isect) into (trav_in,
+     * isect_in) */
     if (st == SLUICE_OK)
         st = sluice_kernel_set_input(t->k_route_t, 0, t->codes);
     if (st == SLUICE_OK)
@@ -181,6 +199,8 @@ static sluice_status prepare(rt_tracer *t, size_t n)
         st = sluice_kernel_set_input(t->k_route_setup, 0, t->codes);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_output(t->k_route_setup, 1, 0, t->trav_in, mode);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(t->k_route_setup, 2, 1, t->isect_in, mode);
 
     if (st == SLUICE_OK) {
         sluice_loop_desc d;

@@ -345,7 +345,8 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sr_scene *scene,
         sr_set_error(err, err_size, "list copy: %s", sluice_context_error(ctx));
     if (st == SLUICE_OK && (st = build_macro_cells(t)) != SLUICE_OK)
         sr_set_error(err, err_size, "macro cells: %s", sluice_context_error(ctx));
-    static const char *const ctr_names[] = {"voxels", "tests", "done", "slices", "slices skipped"};
+    static const char *const ctr_names[] = {"voxels", "tests",          "done",
+                                            "slices", "slices skipped", "entered"};
     if (st == SLUICE_OK)
         st = sluice_counters_create(ctx, RT_CTR_TRACE_COUNT, ctr_names, &t->counters);
     if (st == SLUICE_OK)

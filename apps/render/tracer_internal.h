@@ -14,7 +14,8 @@ enum {
     RT_CTR_DONE = 2,
     RT_CTR_SLICES = 3,         /* fused, slice by slice: slices packets crossed */
     RT_CTR_SLICES_SKIPPED = 4, /* of those, crossed through empty macro cells */
-    RT_CTR_TRACE_COUNT = 5
+    RT_CTR_ENTERED = 5,        /* stream: rays that entered the grid (rt_setup) */
+    RT_CTR_TRACE_COUNT = 6
 };
 
 struct rt_tracer {

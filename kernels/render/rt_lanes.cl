@@ -69,6 +69,26 @@ inline int16 rt_gather_i(global const uint *p, int16 idx, int16 m)
 #endif
 }
 
+/* The list bounds cell_start[ci] and cell_start[ci + 1] of voxels ci in the
+ * lanes where m is set (0 elsewhere). With AVX-512 each pair is one 8-byte
+ * element of two 8-lane gathers: half the elements of two 16-lane gathers,
+ * and a gather costs about a cycle an element. */
+inline void rt_cell_bounds16(global const uint *cell_start, int16 ci, int16 m, int16 *a, int16 *b)
+{
+#if defined(RT_GATHER512_) && __has_builtin(__builtin_ia32_gathersiv8di) && !defined(RT_NO_PAIR)
+    ushort k = sluice_mask16(m);
+    const void *base = (const void *)(size_t)cell_start;
+    long8 lo = __builtin_ia32_gathersiv8di((long8)0, base, ci.lo, (uchar)k, 4);
+    long8 hi = __builtin_ia32_gathersiv8di((long8)0, base, ci.hi, (uchar)(k >> 8), 4);
+    int16 l = as_int16(lo), h = as_int16(hi);
+    *a = __builtin_shufflevector(l, h, 0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+    *b = __builtin_shufflevector(l, h, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
+#else
+    *a = rt_gather_i(cell_start, ci, m);
+    *b = rt_gather_i(cell_start, ci + 1, m);
+#endif
+}
+
 /* The number of the lowest set bit of m (m != 0). */
 inline int rt_lowest_bit(uint m)
 {

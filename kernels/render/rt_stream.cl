@@ -20,7 +20,8 @@
  *
  * Build options: RT_UNROLL_STEPS (k, voxels per traverse pass) and
  * RT_UNROLL_TESTS (m, triangles per intersect pass), Purcell 5.2.2.
- * Counters: 0 voxels visited, 1 triangle tests, 2 rays finished.
+ * Counters: 0 voxels visited, 1 triangle tests, 2 rays finished, 5 rays that
+ * entered the grid (rt_setup).
  */
 #ifndef RT_UNROLL_STEPS
 #define RT_UNROLL_STEPS 1
@@ -46,6 +47,16 @@ inline void rt_walk16_load(global const rt_ray *rays, global const rt_walk *walk
     *pos = as_uint16(rt_gather_i(w, at + 3, (int16)-1));
 }
 
+/* The lanes' walk states, lane by lane: wc[0..2][l] the voxel, wc[3][l] the
+ * list position. */
+inline void rt_walk16_spill(int16 cx, int16 cy, int16 cz, uint16 pos, int (*wc)[16])
+{
+    vstore16(cx, 0, wc[0]);
+    vstore16(cy, 0, wc[1]);
+    vstore16(cz, 0, wc[2]);
+    vstore16(as_int16(pos), 0, wc[3]);
+}
+
 /* rt_voxel_step in the lanes of go, through face `axis`: returns the lanes
  * that left the grid. */
 inline int16 rt_step16(const rt_grid_args *g, const rt_packet *r, int16 go, int16 axis, int16 *cx,
@@ -57,6 +68,39 @@ inline int16 rt_step16(const rt_grid_args *g, const rt_packet *r, int16 go, int1
     *cz += select((int16)0, select((int16)-1, (int16)1, r->dz > 0.0f), sz);
     return (sx & ((*cx < 0) | (*cx >= g->dims[0]))) | (sy & ((*cy < 0) | (*cy >= g->dims[1]))) |
            (sz & ((*cz < 0) | (*cz >= g->dims[2])));
+}
+
+/* Up to RT_UNROLL_STEPS voxels of the rays in the lanes of `active`, from
+ * voxel (cx, cy, cz) on, as rt_traverse_one takes them: a non-empty voxel
+ * sets the lane in *found and its list's start in *pos; leaving the grid, or
+ * passing the ray's end, sets it in *done. Adds the voxels visited. Inlined,
+ * so that the state stays in registers. */
+__attribute__((always_inline)) inline void rt_traverse16(const rt_grid_args *g, const rt_packet *r,
+                                                         global const uint *cell_start,
+                                                         int16 active, int16 *cx, int16 *cy,
+                                                         int16 *cz, uint16 *pos, uint16 *visited,
+                                                         int16 *found, int16 *done)
+{
+    for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
+        if (!rt_any16(active))
+            break;
+        *visited += as_uint16(active) & (uint16)1u;
+        int16 ci = rt_cell_index16(g, *cx, *cy, *cz);
+        int16 ai, bi;
+        rt_cell_bounds16(cell_start, ci, active, &ai, &bi);
+        uint16 a = as_uint16(ai), b = as_uint16(bi);
+        int16 f = active & as_int16(a < b);
+        *pos = select(*pos, a, as_uint16(f));
+        *found |= f;
+        active &= ~f;
+        int16 axis;
+        float16 te = rt_voxel_exit16(g, r, *cx, *cy, *cz, &axis);
+        int16 leave = active & (te >= r->tmax);
+        int16 go = active & ~leave;
+        int16 out = rt_step16(g, r, go, axis, cx, cy, cz);
+        *done |= leave | out;
+        active &= ~(leave | out);
+    }
 }
 
 /* A ray is done: keep the largest per-ray step and test counts (read first,
@@ -122,70 +166,6 @@ inline void rt_stream_prefetch(global const uint *ids, uint from, uint end,
     }
 }
 
-/* Eye-ray (or any ray) setup: clip to the grid. Every ray's hit record starts
- * as a miss with no work done (rays that miss the grid's box are done at
- * once); the others start at their first voxel and go to traversal. */
-__kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *codes,
-                       global rt_walk *walk, global rt_hit *hits, const rt_grid_args g)
-{
-    SLUICE_FOR_EACH_RANGE (lo, hi) {
-        const uint16 lane =
-            (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
-        uint i = lo;
-        for (; i + 16u <= hi; i += 16u) {
-            /* the next block's rays, one line each (SLUICE_PREFETCH) */
-            for (uint q = i + 16u; q < min(i + 32u, hi); ++q)
-                SLUICE_PREFETCH(rays + q);
-            rt_packet r;
-            rt_packet_load(rays, as_int16((uint16)i + lane), (int16)-1, &r);
-            /* rt_grid_enter, lane by lane */
-            float16 t0 = r.tmin, t1 = r.tmax;
-            int16 miss = (int16)0;
-            float16 o[3] = {r.ox, r.oy, r.oz}, d[3] = {r.dx, r.dy, r.dz};
-            float16 inv[3] = {r.ix, r.iy, r.iz};
-            for (int k = 0; k < 3; ++k) {
-                int16 par = d[k] == 0.0f;
-                miss |= par & ((o[k] < g.lo[k]) | (o[k] > g.hi[k]));
-                float16 ta = (g.lo[k] - o[k]) * inv[k], tb = (g.hi[k] - o[k]) * inv[k];
-                t0 = select(fmax(t0, fmin(ta, tb)), t0, par);
-                t1 = select(fmin(t1, fmax(ta, tb)), t1, par);
-            }
-            int16 in = ~miss & (t0 <= t1);
-            int c[3][16];
-            for (int k = 0; k < 3; ++k) {
-                float16 p = o[k] + d[k] * t0;
-                int16 v = convert_int16(floor((p - g.lo[k]) * g.inv_cell[k]));
-                vstore16(clamp(v, (int16)0, (int16)(g.dims[k] - 1)), 0, c[k]);
-            }
-            float tm[16];
-            vstore16(r.tmax, 0, tm);
-            for (uint l = 0; l < 16u; ++l) {
-                rt_hit h;
-                h.tri = RT_NO_HIT;
-                h.t = tm[l];
-                h.u = 0.0f;
-                h.v = 0.0f;
-                h.steps = 0u;
-                h.tests = 0u;
-                hits[i + l] = h;
-                rt_walk w;
-                w.cx = c[0][l];
-                w.cy = c[1][l];
-                w.cz = c[2][l];
-                w.pos = 0u;
-                walk[i + l] = w;
-            }
-            vstore16(select((uint16)RT_NEXT_DONE, (uint16)RT_NEXT_TRAVERSE, as_uint16(in)), 0,
-                     codes + i);
-            SLUICE_COUNT(2, (uint)popcount((uint)sluice_mask16(~in)));
-        }
-        for (; i < hi; ++i) {
-            int in = rt_setup_one(&g, rays, codes, walk, hits, i);
-            SLUICE_COUNT(2, !in);
-        }
-    }
-}
-
 /* One ray of rt_traverse (the records after the last block of 16): up to
  * RT_UNROLL_STEPS voxels. Returns the ray's next stream; adds the voxels
  * visited to *visited. */
@@ -224,6 +204,96 @@ inline uint rt_traverse_one(const rt_grid_args *g, global const rt_ray *rays, gl
     return next;
 }
 
+/* Eye-ray (or any ray) setup and the first traverse pass: clip to the grid,
+ * then up to RT_UNROLL_STEPS voxels as rt_traverse takes them. Every ray's
+ * hit record starts as a miss with no tests; rays that miss the grid's box
+ * are done at once, the others go on from their first voxel. Setup and the
+ * first pass are one kernel so that the rays are read once and the walk
+ * state is written once (rt_route_setup then sends the ids on, with the
+ * ray's index as its id). */
+__kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *codes,
+                       global rt_walk *walk, global rt_hit *hits, global uint *maxima,
+                       global const uint *cell_start, const rt_grid_args g)
+{
+    SLUICE_FOR_EACH_RANGE (lo, hi) {
+        const uint16 lane =
+            (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+        uint i = lo, visited_all = 0u, done_all = 0u, entered_all = 0u;
+        for (; i + 16u <= hi; i += 16u) {
+            /* the next block's rays, one line each (SLUICE_PREFETCH) */
+            for (uint q = i + 16u; q < min(i + 32u, hi); ++q)
+                SLUICE_PREFETCH(rays + q);
+            rt_packet r;
+            rt_packet_load(rays, as_int16((uint16)i + lane), (int16)-1, &r);
+            /* rt_grid_enter, lane by lane */
+            float16 t0 = r.tmin, t1 = r.tmax;
+            int16 miss = (int16)0;
+            float16 o[3] = {r.ox, r.oy, r.oz}, d[3] = {r.dx, r.dy, r.dz};
+            float16 inv[3] = {r.ix, r.iy, r.iz};
+            for (int k = 0; k < 3; ++k) {
+                int16 par = d[k] == 0.0f;
+                miss |= par & ((o[k] < g.lo[k]) | (o[k] > g.hi[k]));
+                float16 ta = (g.lo[k] - o[k]) * inv[k], tb = (g.hi[k] - o[k]) * inv[k];
+                t0 = select(fmax(t0, fmin(ta, tb)), t0, par);
+                t1 = select(fmin(t1, fmax(ta, tb)), t1, par);
+            }
+            int16 in = ~miss & (t0 <= t1);
+            int16 c[3];
+            for (int k = 0; k < 3; ++k) {
+                float16 p = o[k] + d[k] * t0;
+                int16 v = convert_int16(floor((p - g.lo[k]) * g.inv_cell[k]));
+                c[k] = clamp(v, (int16)0, (int16)(g.dims[k] - 1));
+            }
+            int16 cx = c[0], cy = c[1], cz = c[2];
+            uint16 pos = (uint16)0u, visited = (uint16)0u;
+            int16 done = ~in, found = (int16)0;
+            rt_traverse16(&g, &r, cell_start, in, &cx, &cy, &cz, &pos, &visited, &found, &done);
+            uint16 next = select(
+                select((uint16)RT_NEXT_TRAVERSE, (uint16)RT_NEXT_INTERSECT, as_uint16(found)),
+                (uint16)RT_NEXT_DONE, as_uint16(done));
+            vstore16(next, 0, codes + i);
+            int wc[4][16];
+            uint vs[16], nx[16];
+            float tm[16];
+            vstore16(r.tmax, 0, tm);
+            vstore16(visited, 0, vs);
+            vstore16(next, 0, nx);
+            rt_walk16_spill(cx, cy, cz, pos, wc);
+            for (uint l = 0; l < 16u; ++l) {
+                rt_hit h;
+                h.tri = RT_NO_HIT;
+                h.t = tm[l];
+                h.u = 0.0f;
+                h.v = 0.0f;
+                h.steps = vs[l];
+                h.tests = 0u;
+                hits[i + l] = h;
+                rt_walk w;
+                w.cx = wc[0][l];
+                w.cy = wc[1][l];
+                w.cz = wc[2][l];
+                w.pos = (uint)wc[3][l];
+                rt_stream_retire(nx[l], maxima, vs[l], 0u, walk, i + l, w);
+                visited_all += vs[l];
+            }
+            done_all += (uint)popcount((uint)sluice_mask16(done));
+            entered_all += (uint)popcount((uint)sluice_mask16(in));
+        }
+        for (; i < hi; ++i) {
+            int in = rt_setup_one(&g, rays, codes, walk, hits, i);
+            uint next = in ? RT_NEXT_TRAVERSE : RT_NEXT_DONE;
+            entered_all += (uint)in;
+            if (in)
+                next = rt_traverse_one(&g, rays, walk, hits, maxima, cell_start, i, &visited_all);
+            codes[i] = next;
+            done_all += next == RT_NEXT_DONE;
+        }
+        SLUICE_COUNT(0, visited_all);
+        SLUICE_COUNT(2, done_all);
+        SLUICE_COUNT(5, entered_all);
+    }
+}
+
 /* Up to RT_UNROLL_STEPS voxels: a non-empty voxel sends the ray to the
  * intersector (empty voxels never reach it); leaving the grid, or passing
  * the ray's end, finishes it as a miss. Blocks of 16 rays run in lanes. */
@@ -243,27 +313,10 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
             int16 cx, cy, cz;
             uint16 pos;
             rt_walk16_load(rays, walk, idv, &r, &cx, &cy, &cz, &pos);
-            int16 active = (int16)-1, done = (int16)0, found = (int16)0;
+            int16 done = (int16)0, found = (int16)0;
             uint16 visited = (uint16)0u;
-            for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
-                if (!any(active))
-                    break;
-                visited += as_uint16(active) & (uint16)1u;
-                int16 ci = rt_cell_index16(&g, cx, cy, cz);
-                uint16 a = as_uint16(rt_gather_i(cell_start, ci, active));
-                uint16 b = as_uint16(rt_gather_i(cell_start, ci + 1, active));
-                int16 f = active & as_int16(a < b);
-                pos = select(pos, a, as_uint16(f));
-                found |= f;
-                active &= ~f;
-                int16 axis;
-                float16 te = rt_voxel_exit16(&g, &r, cx, cy, cz, &axis);
-                int16 leave = active & (te >= r.tmax);
-                int16 go = active & ~leave;
-                int16 out = rt_step16(&g, &r, go, axis, &cx, &cy, &cz);
-                done |= leave | out;
-                active &= ~(leave | out);
-            }
+            rt_traverse16(&g, &r, cell_start, (int16)-1, &cx, &cy, &cz, &pos, &visited, &found,
+                          &done);
             uint16 next = select(
                 select((uint16)RT_NEXT_TRAVERSE, (uint16)RT_NEXT_INTERSECT, as_uint16(found)),
                 (uint16)RT_NEXT_DONE, as_uint16(done));
@@ -271,10 +324,7 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
             uint vs[16], nx[16];
             vstore16(visited, 0, vs);
             vstore16(next, 0, nx);
-            vstore16(cx, 0, wc[0]);
-            vstore16(cy, 0, wc[1]);
-            vstore16(cz, 0, wc[2]);
-            vstore16(as_int16(pos), 0, wc[3]);
+            rt_walk16_spill(cx, cy, cz, pos, wc);
             for (uint l = 0; l < 16u; ++l) {
                 global rt_hit *h = &hits[id[l]];
                 uint steps = h->steps + vs[l];
@@ -424,7 +474,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
             uint16 tested = (uint16)0u, visited = (uint16)0u;
             uint16 next = (uint16)RT_NEXT_INTERSECT;
             int16 active = (int16)-1, done = (int16)0;
-            while (any(active)) {
+            while (rt_any16(active)) {
                 /* the current voxel's list, as far as the budget goes */
                 uint16 stop = min(end, pos + ((uint16)RT_UNROLL_TESTS - tested));
                 stop = select(pos, stop, as_uint16(active));
@@ -443,22 +493,23 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                 int16 out = rt_step16(&g, &r, go, axis, &cx, &cy, &cz);
                 done |= fin | out;
                 active &= ~(fin | out);
-                if (!any(active))
+                if (!rt_any16(active))
                     break;
                 /* the next voxel: an empty one goes to traversal (which
                  * enters it); a non-empty one is entered here */
                 ci = rt_cell_index16(&g, cx, cy, cz);
-                uint16 a = as_uint16(rt_gather_i(cell_start, ci, active));
-                uint16 b = as_uint16(rt_gather_i(cell_start, ci + 1, active));
+                int16 ai, bi;
+                rt_cell_bounds16(cell_start, ci, active, &ai, &bi);
+                uint16 a = as_uint16(ai), b = as_uint16(bi);
                 int16 empty = active & as_int16(a >= b);
-                next = select(next, (uint16)RT_NEXT_TRAVERSE, as_uint16(empty));
                 active &= ~empty;
                 visited += as_uint16(active) & (uint16)1u;
                 pos = select(pos, a, as_uint16(active));
                 end = select(end, b, as_uint16(active));
+                next = select(next, (uint16)RT_NEXT_TRAVERSE, as_uint16(empty));
                 /* budget spent: the new list waits for the next pass */
                 active &= as_int16(tested < (uint16)RT_UNROLL_TESTS);
-                if (!any(active))
+                if (!rt_any16(active))
                     break;
                 int16 ax;
                 float16 te2 = rt_voxel_exit16(&g, &r, cx, cy, cz, &ax);
@@ -479,10 +530,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
             vstore16(r.u, 0, fu);
             vstore16(r.v, 0, fv);
             vstore16(as_uint16((r.tri != tri0) | (as_int16(r.t) != as_int16(t0))), 0, changed);
-            vstore16(cx, 0, wc[0]);
-            vstore16(cy, 0, wc[1]);
-            vstore16(cz, 0, wc[2]);
-            vstore16(as_int16(pos), 0, wc[3]);
+            rt_walk16_spill(cx, cy, cz, pos, wc);
             vstore16(visited, 0, vs);
             for (uint l = 0; l < 16u; ++l) {
                 global rt_hit *h = &hits[id[l]];
@@ -540,19 +588,24 @@ __kernel void rt_route(SLUICE_PARAMS, global const uint *codes, global const uin
     }
 }
 
-/* After setup: the codes are indexed by ray, so record i is ray i. */
-__kernel void rt_route_setup(SLUICE_PARAMS, global const uint *codes, global uint *trav)
+/* After setup: the codes are indexed by ray, so record i is ray i; slot 0
+ * is the traverse stream, slot 1 the intersect stream. */
+__kernel void rt_route_setup(SLUICE_PARAMS, global const uint *codes, global uint *trav,
+                             global uint *isect)
 {
     SLUICE_FOR_EACH_RANGE (b, e) {
         const uint16 lane =
             (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
         uint i = b;
         for (; i + 16u <= e; i += 16u) {
-            uint16 cv = vload16(0, codes + i);
-            SLUICE_EMIT16(0, trav, (uint16)i + lane,
-                          sluice_mask16(as_int16(cv == (uint16)RT_NEXT_TRAVERSE)));
+            uint16 cv = vload16(0, codes + i), x = (uint16)i + lane;
+            SLUICE_EMIT16(0, trav, x, sluice_mask16(as_int16(cv == (uint16)RT_NEXT_TRAVERSE)));
+            SLUICE_EMIT16(1, isect, x, sluice_mask16(as_int16(cv == (uint16)RT_NEXT_INTERSECT)));
         }
-        for (; i < e; ++i)
-            SLUICE_EMIT_IF(0, trav, i, codes[i] == RT_NEXT_TRAVERSE);
+        for (; i < e; ++i) {
+            uint cd = codes[i];
+            SLUICE_EMIT_IF(0, trav, i, cd == RT_NEXT_TRAVERSE);
+            SLUICE_EMIT_IF(1, isect, i, cd == RT_NEXT_INTERSECT);
+        }
     }
 }
