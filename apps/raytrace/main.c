@@ -47,7 +47,7 @@ static void usage(FILE *out)
         "  --intersect-threshold F  stream mode: intersect when >= F of live rays need it\n"
         "                           (default 0.2)\n"
         "  --unroll-steps K         stream mode: voxels per traverse pass (default 32)\n"
-        "  --unroll-tests M         stream mode: triangle tests per intersect pass (default 64)\n"
+        "  --unroll-tests M         stream mode: triangle tests per intersect pass (default 256)\n"
         "  --ordered                stream mode: ordered conditional outputs\n\n"
         "Ctrl-C finishes the current sample, writes the image so far and exits with 130.\n\n"
         "examples:\n"

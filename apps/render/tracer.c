@@ -22,12 +22,10 @@ rt_tracer_options rt_tracer_options_default(void)
     o.grid_build = RT_GRID_BUILD_DEVICE;
     o.grid_min_dim = RT_GRID_AUTO_MIN_DIM;
     o.intersect_threshold = 0.2f;
-    /* k = 32, m = 64: against 16 and 32, 18-27% faster on bunny, 20-22% on
-     * teapotahedron, 14-19% on spheres:1000, the Cornell box within noise
-     * (bench_raytrace's stream tracer, two tracers alternating in one
-     * process); k = 64 or m = 128 were no better */
+    /* k = 32, m = 256: fewer, longer intersect passes; measured against
+     * other k and m in bench/README.md ("The stream mode's 3x") */
     o.unroll_steps = 32;
-    o.unroll_tests = 64;
+    o.unroll_tests = 256;
     o.ordered = 0;
     o.fused_walk = RT_WALK_AUTO;
     o.list_copy_max = RT_LIST_COPY_MAX_DEFAULT;
