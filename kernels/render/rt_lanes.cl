@@ -83,6 +83,15 @@ inline void rt_cell_bounds16(global const uint *cell_start, int16 ci, int16 m, i
     int16 l = as_int16(lo), h = as_int16(hi);
     *a = __builtin_shufflevector(l, h, 0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
     *b = __builtin_shufflevector(l, h, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
+#elif defined(RT_AVX2_) && __has_builtin(__builtin_ia32_gatherd_q256) && !defined(RT_NO_PAIR2)
+    const long *base = (const long *)(size_t)cell_start;
+    long4 q0 = __builtin_ia32_gatherd_q256((long4)0, base, ci.s0123, convert_long4(m.s0123), 4);
+    long4 q1 = __builtin_ia32_gatherd_q256((long4)0, base, ci.s4567, convert_long4(m.s4567), 4);
+    long4 q2 = __builtin_ia32_gatherd_q256((long4)0, base, ci.s89ab, convert_long4(m.s89ab), 4);
+    long4 q3 = __builtin_ia32_gatherd_q256((long4)0, base, ci.scdef, convert_long4(m.scdef), 4);
+    int16 l = (int16)(as_int8(q0), as_int8(q1)), h = (int16)(as_int8(q2), as_int8(q3));
+    *a = __builtin_shufflevector(l, h, 0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+    *b = __builtin_shufflevector(l, h, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
 #else
     *a = rt_gather_i(cell_start, ci, m);
     *b = rt_gather_i(cell_start, ci + 1, m);
