@@ -56,6 +56,7 @@
 #include "clock.h"
 #include "bench_args.h"
 #include "bench_machine.h"
+#include "bench_rays.h"
 #include "device_scene.h"
 #include "grid.h"
 #include "mt_ref.h"
@@ -115,37 +116,14 @@ static void *xmalloc(size_t n)
 /* Eye rays                                                            */
 /* ------------------------------------------------------------------ */
 
-/* One ray per pixel through its centre, in 8x8 tiles as the renderer's
- * rt_raygen orders them (neighbouring rays are neighbours in the stream). */
+/* bench_eye_rays (bench_rays.h), or exit when out of memory. */
 static rt_ray *eye_rays(const sr_scene *sc, unsigned w, unsigned h)
 {
-    rt_frame f;
-    memset(&f, 0, sizeof f);
-    sr_camera_frame(sr_scene_camera(sc), w, h, &f);
-    rt_ray *rays = xmalloc((size_t)w * h * sizeof *rays);
-    size_t n = 0;
-    for (unsigned ty = 0; ty < h; ty += 8)
-        for (unsigned tx = 0; tx < w; tx += 8)
-            for (unsigned y = ty; y < ty + 8 && y < h; ++y)
-                for (unsigned x = tx; x < tx + 8 && x < w; ++x) {
-                    float px = (float)x + 0.5f, py = (float)y + 0.5f, d[3];
-                    for (int k = 0; k < 3; ++k)
-                        d[k] = f.corner[k] + f.du[k] * px + f.dv[k] * py;
-                    float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-                    rt_ray *r = &rays[n++];
-                    memset(r, 0, sizeof *r);
-                    r->ox = f.eye[0];
-                    r->oy = f.eye[1];
-                    r->oz = f.eye[2];
-                    r->dx = d[0] / len;
-                    r->dy = d[1] / len;
-                    r->dz = d[2] / len;
-                    r->tmin = 0.0f;
-                    r->tmax = INFINITY;
-                    r->wr = r->wg = r->wb = 1.0f;
-                    r->pixel = y * w + x;
-                    r->flags = RT_KIND_EYE;
-                }
+    rt_ray *rays = bench_eye_rays(sc, w, h);
+    if (!rays) {
+        fprintf(stderr, PROG ": out of memory\n");
+        exit(2);
+    }
     return rays;
 }
 
@@ -621,20 +599,9 @@ static double agree_t(const peer_hits *a, const peer_hits *b, const ray_set *set
 }
 #endif
 
-/* "bunny-close": the bunny filling most of the frame (bench/scenes). */
 static sr_scene *load_scene(const char *name)
 {
-    char err[512];
-    sr_scene_load_options o = {0};
-    o.flags = SR_SCENE_ALLOW_NO_LIGHT;
-    sr_scene *sc = NULL;
-    const char *path =
-        strcmp(name, "bunny-close") == 0 ? BENCH_SCENES_DIR "/bunny-close.json" : name;
-    if (sr_scene_load(path, &o, &sc, err, sizeof err) != SLUICE_OK) {
-        fprintf(stderr, PROG ": %s\n", err);
-        return NULL;
-    }
-    return sc;
+    return bench_load_scene(PROG, name);
 }
 
 static rt_tracer *make_tracer(const sr_scene *sc, rt_exec exec, unsigned min_dim, unsigned unroll,
