@@ -13,6 +13,9 @@
  * stream by conditional outputs (16 at a time); finished rays go nowhere,
  * their hit already in place. The input stream and its output are a
  * ping-pong pair, swapped after the pass on the device (no round trip).
+ * The setup kernel clips every ray to the grid and takes it through the
+ * first traverse pass too (the rays are read once for both), and
+ * rt_route_setup sends the ray indices to the two streams.
  * After each pass the loop reads both lengths and the counters in one read
  * and the oracle picks the next pass by Purcell's rule: intersect once at
  * least a fraction (20% by default) of the live rays wait for it, else

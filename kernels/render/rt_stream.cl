@@ -3,7 +3,8 @@
  * (thesis ch. 3.1 and 4.1.2): traversal setup, a traverse kernel and an
  * intersect kernel, each of which moves every ray of its stream on by a
  * bounded amount of work, and a route kernel that sorts the rays into the
- * "traverse" and "intersect" streams with conditional outputs.
+ * "traverse" and "intersect" streams with conditional outputs. Setup also
+ * runs the first traverse pass, so that it reads the rays once for both.
  *
  * The streams carry 4-byte ray ids. What a ray has done so far lives in
  * buffers indexed by ray, as Purcell keeps it in textures: its voxel and list
