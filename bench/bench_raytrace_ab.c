@@ -173,7 +173,7 @@ int main(int argc, char **argv)
         else if (strcmp(a, "--pairs") == 0)
             ok = bench_parse_uint(val, 100000, &pairs) && pairs > 0;
         else if (strcmp(a, "--a") == 0 || strcmp(a, "--b") == 0)
-            v[a[3] - 'a'].options = val;
+            v[a[2] - 'a'].options = val;
         else if (strcmp(a, "--a-steps") == 0 || strcmp(a, "--b-steps") == 0)
             ok = bench_parse_uint(val, 4096, &v[a[2] - 'a'].steps) && v[a[2] - 'a'].steps > 0;
         else if (strcmp(a, "--a-tests") == 0 || strcmp(a, "--b-tests") == 0)
