@@ -70,12 +70,13 @@ inline int16 rt_gather_i(global const uint *p, int16 idx, int16 m)
 }
 
 /* The list bounds cell_start[ci] and cell_start[ci + 1] of voxels ci in the
- * lanes where m is set (0 elsewhere). With AVX-512 each pair is one 8-byte
- * element of two 8-lane gathers: half the elements of two 16-lane gathers,
- * and a gather costs about a cycle an element. */
+ * lanes where m is set (0 elsewhere). With AVX-512 or AVX2 each pair is one
+ * 8-byte gather element (two 8-lane or four 4-lane gathers): half the
+ * elements of gathering the two bounds apart, and a gather costs about a
+ * cycle an element. */
 inline void rt_cell_bounds16(global const uint *cell_start, int16 ci, int16 m, int16 *a, int16 *b)
 {
-#if defined(RT_GATHER512_) && __has_builtin(__builtin_ia32_gathersiv8di) && !defined(RT_NO_PAIR)
+#if defined(RT_GATHER512_) && __has_builtin(__builtin_ia32_gathersiv8di)
     ushort k = sluice_mask16(m);
     const void *base = (const void *)(size_t)cell_start;
     long8 lo = __builtin_ia32_gathersiv8di((long8)0, base, ci.lo, (uchar)k, 4);
@@ -83,7 +84,7 @@ inline void rt_cell_bounds16(global const uint *cell_start, int16 ci, int16 m, i
     int16 l = as_int16(lo), h = as_int16(hi);
     *a = __builtin_shufflevector(l, h, 0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
     *b = __builtin_shufflevector(l, h, 1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
-#elif defined(RT_AVX2_) && __has_builtin(__builtin_ia32_gatherd_q256) && !defined(RT_NO_PAIR2)
+#elif defined(RT_AVX2_) && __has_builtin(__builtin_ia32_gatherd_q256)
     const long *base = (const long *)(size_t)cell_start;
     long4 q0 = __builtin_ia32_gatherd_q256((long4)0, base, ci.s0123, convert_long4(m.s0123), 4);
     long4 q1 = __builtin_ia32_gatherd_q256((long4)0, base, ci.s4567, convert_long4(m.s4567), 4);

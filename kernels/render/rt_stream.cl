@@ -104,6 +104,13 @@ __attribute__((always_inline)) inline void rt_traverse16(const rt_grid_args *g, 
     }
 }
 
+/* The lanes' next streams after traversal (RT_NEXT_*). */
+inline uint16 rt_next16(int16 found, int16 done)
+{
+    return select(select((uint16)RT_NEXT_TRAVERSE, (uint16)RT_NEXT_INTERSECT, as_uint16(found)),
+                  (uint16)RT_NEXT_DONE, as_uint16(done));
+}
+
 /* A ray is done: keep the largest per-ray step and test counts (read first,
  * so the atomic is rare). Its hit record is already in place. */
 inline void rt_stream_maxima(global uint *maxima, uint steps, uint tests)
@@ -249,9 +256,7 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
             uint16 pos = (uint16)0u, visited = (uint16)0u;
             int16 done = ~in, found = (int16)0;
             rt_traverse16(&g, &r, cell_start, in, &cx, &cy, &cz, &pos, &visited, &found, &done);
-            uint16 next = select(
-                select((uint16)RT_NEXT_TRAVERSE, (uint16)RT_NEXT_INTERSECT, as_uint16(found)),
-                (uint16)RT_NEXT_DONE, as_uint16(done));
+            uint16 next = rt_next16(found, done);
             vstore16(next, 0, codes + i);
             int wc[4][16];
             uint vs[16], nx[16];
@@ -318,9 +323,7 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
             uint16 visited = (uint16)0u;
             rt_traverse16(&g, &r, cell_start, (int16)-1, &cx, &cy, &cz, &pos, &visited, &found,
                           &done);
-            uint16 next = select(
-                select((uint16)RT_NEXT_TRAVERSE, (uint16)RT_NEXT_INTERSECT, as_uint16(found)),
-                (uint16)RT_NEXT_DONE, as_uint16(done));
+            uint16 next = rt_next16(found, done);
             vstore16(next, 0, codes + i);
             uint vs[16], nx[16];
             vstore16(visited, 0, vs);

@@ -223,9 +223,9 @@ sluice_status sluice_kernel_set_counters(sluice_kernel *k, sluice_counters *coun
  * 4096 (bench_streams --reps 15, two runs each). In the interleaved layout
  * (GPUs) up to 64 records: a work-group's tile of 64 chunks, whose ordered
  * outputs' counts the host scans one per group (group order, sluice.cl).
- * On CPUs a multiple of 16 records: with a length known on the host (a
- * stream loop's passes) a chunk of 53 left 5 records of every chunk to the
- * ray tracer's one-ray-at-a-time tails, 3% of its traverse records. */
+ * On CPUs a multiple of 16 records, so that kernels taking 16 records at a
+ * time leave a tail only in the input's last chunk (bench/README.md, "The
+ * stream mode's 3x on Zen 4"). */
 static size_t choose_chunk(const sluice_context *ctx, size_t bound)
 {
     if (ctx->chunk)
@@ -236,9 +236,6 @@ static size_t choose_chunk(const sluice_context *ctx, size_t bound)
         hi = 64;
         want = bound / 65536;
     } else {
-        /* whole blocks of 16: kernels that take their records 16 at a time
-         * (SLUICE_EMIT16, the ray tracer's lanes) run only the input's last
-         * chunk's tail record by record */
         want = (want + 15) & ~(size_t)15;
     }
     return want < lo ? lo : want > hi ? hi : want;
