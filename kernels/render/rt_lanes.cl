@@ -145,6 +145,16 @@ inline int rt_any16(int16 m)
 #endif
 }
 
+/* rt_any16 for 8 lanes (one AVX2 register). */
+inline int rt_any8(int8 m)
+{
+#if defined(SLUICE_AVX2_)
+    return __builtin_ia32_movmskps256(as_float8(m)) != 0;
+#else
+    return any(m);
+#endif
+}
+
 /* The rays of a packet, one per lane (as rt_rayp), and the best hits. */
 typedef struct rt_packet {
     float16 ox, oy, oz, dx, dy, dz, ix, iy, iz, tmin, tmax;
@@ -225,8 +235,8 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
  * F (floats) and I (ints) of one width: rays (o, d, tmin) against triangles
  * (v0, e1, e2) in the lanes of mask m, keeping hits nearer than t and not
  * past limit in (tri, t, u, v), which are lvalues. */
-#define RT_MT_(F, I, itri, mask, ox, oy, oz, dx, dy, dz, tmin, limit, tri, t, u, v, v0x, v0y, v0z, \
-               e1x, e1y, e1z, e2x, e2y, e2z)                                                       \
+#define RT_MT_(F, I, quit, any, itri, mask, ox, oy, oz, dx, dy, dz, tmin, limit, tri, t, u, v,     \
+               v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z)                                        \
     do {                                                                                           \
         F pvx_ = RT_FMS_(dy, e2z, dz, e2y), pvy_ = RT_FMS_(dz, e2x, dx, e2z),                      \
           pvz_ = RT_FMS_(dx, e2y, dy, e2x);                                                        \
@@ -236,6 +246,8 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
         F sx_ = (ox) - (v0x), sy_ = (oy) - (v0y), sz_ = (oz) - (v0z);                              \
         F u_ = RT_DOT_(sx_, pvx_, sy_, pvy_, sz_, pvz_) * inv_;                                    \
         m_ &= ~((u_ < 0.0f) | (u_ > 1.0f));                                                        \
+        if ((quit) && !any(m_))                                                                    \
+            break;                                                                                 \
         F qx_ = RT_FMS_(sy_, e1z, sz_, e1y), qy_ = RT_FMS_(sz_, e1x, sx_, e1z),                    \
           qz_ = RT_FMS_(sx_, e1y, sy_, e1x);                                                       \
         F v_ = RT_DOT_(dx, qx_, dy, qy_, dz, qz_) * inv_;                                          \
@@ -249,57 +261,63 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
     } while (0)
 
 /* RT_MT_ on the half h (lo or hi) of 16 lanes, 8 lanes wide. */
-#define RT_MT_HALF_(h, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z)              \
-    RT_MT_(float8, int8, (tri).h, (m).h, (P)->ox.h, (P)->oy.h, (P)->oz.h, (P)->dx.h, (P)->dy.h,    \
-           (P)->dz.h, (P)->tmin.h, (limit).h, (P)->tri.h, (P)->t.h, (P)->u.h, (P)->v.h, (v0x).h,   \
-           (v0y).h, (v0z).h, (e1x).h, (e1y).h, (e1z).h, (e2x).h, (e2y).h, (e2z).h)
+#define RT_MT_HALF_(h, quit, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z)        \
+    RT_MT_(float8, int8, quit, rt_any8, (tri).h, (m).h, (P)->ox.h, (P)->oy.h, (P)->oz.h,           \
+           (P)->dx.h, (P)->dy.h, (P)->dz.h, (P)->tmin.h, (limit).h, (P)->tri.h, (P)->t.h,          \
+           (P)->u.h, (P)->v.h, (v0x).h, (v0y).h, (v0z).h, (e1x).h, (e1y).h, (e1z).h, (e2x).h,      \
+           (e2y).h, (e2z).h)
 
 /* The Moller-Trumbore test of rt_intersect_tri in the lanes where m is set,
  * against the triangle (v0, e1, e2) of each lane; keeps hits in P. With
  * AVX2 the 16 lanes go as two halves of 8, each one register wide: on
  * 16-lane vectors the compiler packed the comparisons' masks into bytes and
- * unpacked them for every select. */
+ * unpacked them for every select. With quit (a constant) the test stops
+ * after u when no lane passes it: where the lanes are coherent rays, most
+ * triangles that one tests the others miss as well (a voxel's list
+ * broadcast to a packet in that voxel), and elsewhere the branch costs more
+ * than it saves (bench/README.md). */
 __attribute__((always_inline)) inline void
 rt_intersect16_core(int16 tri, int16 m, rt_packet *P, float16 limit, float16 v0x, float16 v0y,
                     float16 v0z, float16 e1x, float16 e1y, float16 e1z, float16 e2x, float16 e2y,
-                    float16 e2z)
+                    float16 e2z, int quit)
 {
 #ifdef RT_AVX2_
     /* a half with no lane to test is skipped: short lists in the turned
      * test (rt_intersect16_turned), small groups of rays */
     uint mm = sluice_mask16(m);
     if (mm & 0xffu)
-        RT_MT_HALF_(lo, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
+        RT_MT_HALF_(lo, quit, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
     if (mm >> 8)
-        RT_MT_HALF_(hi, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
+        RT_MT_HALF_(hi, quit, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
 #else
-    RT_MT_(float16, int16, tri, m, P->ox, P->oy, P->oz, P->dx, P->dy, P->dz, P->tmin, limit, P->tri,
-           P->t, P->u, P->v, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
+    RT_MT_(float16, int16, quit, rt_any16, tri, m, P->ox, P->oy, P->oz, P->dx, P->dy, P->dz,
+           P->tmin, limit, P->tri, P->t, P->u, P->v, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
 #endif
 }
 
-/* rt_intersect16 for one triangle that every lane of m tests (broadcast). */
-__attribute__((always_inline)) inline void rt_intersect16_one(global const float *tv, uint tri,
-                                                              int16 m, rt_packet *P, float16 limit)
+/* rt_intersect16 for one triangle that every lane of m tests (broadcast);
+ * quit as for rt_intersect16_core. */
+__attribute__((always_inline)) inline void
+rt_intersect16_one(global const float *tv, uint tri, int16 m, rt_packet *P, float16 limit, int quit)
 {
     global const float *q = tv + 9u * (size_t)tri;
     /* v0, e1, e2 one float at a time: each is a broadcast load */
     rt_intersect16_core((int16)(int)tri, m, P, limit, (float16)q[0], (float16)q[1], (float16)q[2],
                         (float16)q[3], (float16)q[4], (float16)q[5], (float16)q[6], (float16)q[7],
-                        (float16)q[8]);
+                        (float16)q[8], quit);
 }
 
 #ifdef RT_LIST_COPY
 /* rt_intersect16_one for the triangle of entry r of the list copy (the
  * layout of rt_intersect16_turned), broadcast. */
-__attribute__((always_inline)) inline void rt_intersect16_copy_one(global const float *r, int16 m,
-                                                                   rt_packet *P, float16 limit)
+__attribute__((always_inline)) inline void
+rt_intersect16_copy_one(global const float *r, int16 m, rt_packet *P, float16 limit, int quit)
 {
     rt_intersect16_core((int16)as_int(r[9 * RT_LIST_STRIDE]), m, P, limit, (float16)r[0],
                         (float16)r[RT_LIST_STRIDE], (float16)r[2 * RT_LIST_STRIDE],
                         (float16)r[3 * RT_LIST_STRIDE], (float16)r[4 * RT_LIST_STRIDE],
                         (float16)r[5 * RT_LIST_STRIDE], (float16)r[6 * RT_LIST_STRIDE],
-                        (float16)r[7 * RT_LIST_STRIDE], (float16)r[8 * RT_LIST_STRIDE]);
+                        (float16)r[7 * RT_LIST_STRIDE], (float16)r[8 * RT_LIST_STRIDE], quit);
 }
 #endif
 
@@ -321,12 +339,12 @@ __attribute__((always_inline)) inline void rt_intersect16(global const float *tv
 {
     int2 mm = rt_minmax16(tri, m);
     if (mm.x == mm.y) {
-        rt_intersect16_one(tv, (uint)mm.x, m, P, limit);
+        rt_intersect16_one(tv, (uint)mm.x, m, P, limit, 0);
         return;
     }
     float16 r[9];
     rt_tri_gather16(tv, tri, m, r);
-    rt_intersect16_core(tri, m, P, limit, r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]);
+    rt_intersect16_core(tri, m, P, limit, r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], 0);
 }
 
 /* The lanes of m (not empty) whose list starts where the list of the first
@@ -359,10 +377,10 @@ rt_intersect16_group(global const float *tv, global const float *lists,
             lm &= as_uint16(to) > k;
 #ifdef RT_LIST_COPY
         if (lists)
-            rt_intersect16_copy_one(lists + k, lm, P, limit);
+            rt_intersect16_copy_one(lists + k, lm, P, limit, 0);
         else
 #endif
-            rt_intersect16_one(tv, cell_tris[k], lm, P, limit);
+            rt_intersect16_one(tv, cell_tris[k], lm, P, limit, 0);
     }
 #ifndef RT_LIST_COPY
     (void)lists;
@@ -449,7 +467,7 @@ inline void rt_intersect16_turned(global const float *tv, global const float *li
             Q.tri = (int16)(-1);
             uint lend = (uint)rt_first_lane(to, (ushort)(1u << l));
             rt_intersect16_core(tri, cm & (lane < (int)(lend - k)), &Q, rt_lane_bcast(limit, l),
-                                r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]);
+                                r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], 0);
             int16 hit = Q.tri != -1;
             ushort hm = sluice_mask16(hit);
             if (hm) {
