@@ -422,49 +422,6 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
 }
 #endif /* RT_FUSED_SLICES */
 
-/* Clang's two-vector permutes (PoCL's compiler) write a packet's hits
- * with vector stores (rt_store_hits16); elsewhere a loop over the rays. */
-#if defined(__has_builtin)
-#if __has_builtin(__builtin_shufflevector)
-#define RT_HITS16_ 1
-#endif
-#endif
-
-#ifdef RT_HITS16_
-/* Word i of output vector k of rt_store_hits16 as an index into a pair of
- * field vectors: record (16k + i) / 6, field (16k + i) % 6 of the pair
- * (fields 2j and 2j + 1 share it). */
-#define RT_HW_(k, i) (((16 * (k) + (i)) / 6) + 16 * (((16 * (k) + (i)) % 6) & 1))
-#define RT_HW16_(k)                                                                                \
-    RT_HW_(k, 0), RT_HW_(k, 1), RT_HW_(k, 2), RT_HW_(k, 3), RT_HW_(k, 4), RT_HW_(k, 5),            \
-        RT_HW_(k, 6), RT_HW_(k, 7), RT_HW_(k, 8), RT_HW_(k, 9), RT_HW_(k, 10), RT_HW_(k, 11),      \
-        RT_HW_(k, 12), RT_HW_(k, 13), RT_HW_(k, 14), RT_HW_(k, 15)
-#define RT_HITS_VEC_(k, out)                                                                       \
-    do {                                                                                           \
-        int16 f_ = ((int16)(16 * (k)) + lane) % 6;                                                 \
-        uint16 a_ = __builtin_shufflevector(w[0], w[1], RT_HW16_(k));                              \
-        uint16 b_ = __builtin_shufflevector(w[2], w[3], RT_HW16_(k));                              \
-        uint16 c_ = __builtin_shufflevector(w[4], w[5], RT_HW16_(k));                              \
-        vstore16(select(select(c_, b_, f_ < 4), a_, f_ < 2), k, out);                              \
-    } while (0)
-
-/* The hits of 16 rays as 16 consecutive rt_hit records at out: six vector
- * stores of words made by permutes, where a loop over the rays takes a
- * hundred scalar loads and stores. */
-inline void rt_store_hits16(global uint *out, const rt_packet *P, uint16 steps, uint16 tests)
-{
-    int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    uint16 w[6] = {as_uint16(P->tri), as_uint16(P->t), as_uint16(P->u),
-                   as_uint16(P->v),   steps,           tests};
-    RT_HITS_VEC_(0, out);
-    RT_HITS_VEC_(1, out);
-    RT_HITS_VEC_(2, out);
-    RT_HITS_VEC_(3, out);
-    RT_HITS_VEC_(4, out);
-    RT_HITS_VEC_(5, out);
-}
-#endif
-
 /* Traces rays [first, first + count) (count <= 16) as one packet and writes
  * their hits. Adds the voxels and tests to *steps_sum and *tests_sum, and,
  * slice by slice, the slices crossed and those crossed through empty macro
@@ -611,9 +568,9 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
         active = adv & inside & (P.tri == -1);
     }
 #endif
-#ifdef RT_HITS16_
+#ifdef RT_AOS16_
     if (count == 16u) {
-        rt_store_hits16((global uint *)(hits + first), &P, steps, tests);
+        rt_store_hits16(hits + first, P.tri, P.t, P.u, P.v, steps, tests);
         int16 all = (int16)(-1);
         int2 ms = rt_minmax16(as_int16(steps), all), mt = rt_minmax16(as_int16(tests), all);
         if ((uint)ms.y > maxima[0])

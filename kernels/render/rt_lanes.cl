@@ -155,6 +155,69 @@ inline int rt_any8(int8 m)
 #endif
 }
 
+/* Records of n 4-byte fields written for 16 rays at once: field j of the 16
+ * rays is a vector, and the 16n words of the records are n vectors made by
+ * two-vector permutes (Clang's, PoCL's compiler), each stored whole, where a
+ * loop over the rays takes a scalar load and store per word. Elsewhere the
+ * callers loop. */
+#if defined(__has_builtin)
+#if __has_builtin(__builtin_shufflevector)
+#define RT_AOS16_ 1
+#endif
+#endif
+
+#ifdef RT_AOS16_
+/* Word i of output vector k, n fields a record, as an index into the pair
+ * of field vectors (2j, 2j + 1) that holds it: record (16k + i) / n, the
+ * pair's second vector for an odd field. */
+#define RT_AOS_W_(n, k, i) (((16 * (k) + (i)) / (n)) + 16 * (((16 * (k) + (i)) % (n)) & 1))
+#define RT_AOS_W16_(n, k)                                                                          \
+    RT_AOS_W_(n, k, 0), RT_AOS_W_(n, k, 1), RT_AOS_W_(n, k, 2), RT_AOS_W_(n, k, 3),                \
+        RT_AOS_W_(n, k, 4), RT_AOS_W_(n, k, 5), RT_AOS_W_(n, k, 6), RT_AOS_W_(n, k, 7),            \
+        RT_AOS_W_(n, k, 8), RT_AOS_W_(n, k, 9), RT_AOS_W_(n, k, 10), RT_AOS_W_(n, k, 11),          \
+        RT_AOS_W_(n, k, 12), RT_AOS_W_(n, k, 13), RT_AOS_W_(n, k, 14), RT_AOS_W_(n, k, 15)
+/* The pair holding word i of output vector k: 0, 1 or 2. */
+#define RT_AOS_PAIR_(n, k)                                                                         \
+    ((((int16)(16 * (k)) + (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15)) % (n)) / \
+     2)
+
+/* Output vector k of records of 4 fields w[0..3]. */
+#define RT_AOS4_VEC_(w, k)                                                                         \
+    select(__builtin_shufflevector(w[2], w[3], RT_AOS_W16_(4, k)),                                 \
+           __builtin_shufflevector(w[0], w[1], RT_AOS_W16_(4, k)), RT_AOS_PAIR_(4, k) == 0)
+/* Output vector k of records of 6 fields w[0..5]. */
+#define RT_AOS6_VEC_(w, k)                                                                         \
+    select(select(__builtin_shufflevector(w[4], w[5], RT_AOS_W16_(6, k)),                          \
+                  __builtin_shufflevector(w[2], w[3], RT_AOS_W16_(6, k)),                          \
+                  RT_AOS_PAIR_(6, k) == 1),                                                        \
+           __builtin_shufflevector(w[0], w[1], RT_AOS_W16_(6, k)), RT_AOS_PAIR_(6, k) == 0)
+
+/* 16 consecutive rt_hit records at out, field by field from vectors. */
+inline void rt_store_hits16(global rt_hit *out, int16 tri, float16 t, float16 u, float16 v,
+                            uint16 steps, uint16 tests)
+{
+    global uint *o = (global uint *)out;
+    uint16 w[6] = {as_uint16(tri), as_uint16(t), as_uint16(u), as_uint16(v), steps, tests};
+    vstore16(RT_AOS6_VEC_(w, 0), 0, o);
+    vstore16(RT_AOS6_VEC_(w, 1), 1, o);
+    vstore16(RT_AOS6_VEC_(w, 2), 2, o);
+    vstore16(RT_AOS6_VEC_(w, 3), 3, o);
+    vstore16(RT_AOS6_VEC_(w, 4), 4, o);
+    vstore16(RT_AOS6_VEC_(w, 5), 5, o);
+}
+
+/* 16 consecutive rt_walk records at out. */
+inline void rt_store_walks16(global rt_walk *out, int16 cx, int16 cy, int16 cz, uint16 pos)
+{
+    global uint *o = (global uint *)out;
+    uint16 w[4] = {as_uint16(cx), as_uint16(cy), as_uint16(cz), pos};
+    vstore16(RT_AOS4_VEC_(w, 0), 0, o);
+    vstore16(RT_AOS4_VEC_(w, 1), 1, o);
+    vstore16(RT_AOS4_VEC_(w, 2), 2, o);
+    vstore16(RT_AOS4_VEC_(w, 3), 3, o);
+}
+#endif
+
 /* The rays of a packet, one per lane (as rt_rayp), and the best hits. */
 typedef struct rt_packet {
     float16 ox, oy, oz, dx, dy, dz, ix, iy, iz, tmin, tmax;

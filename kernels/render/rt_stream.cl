@@ -258,6 +258,20 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
             rt_traverse16(&g, &r, cell_start, in, &cx, &cy, &cz, &pos, &visited, &found, &done);
             uint16 next = rt_next16(found, done);
             vstore16(next, 0, codes + i);
+            done_all += (uint)popcount((uint)sluice_mask16(done));
+            entered_all += (uint)popcount((uint)sluice_mask16(in));
+#ifdef RT_AOS16_
+            /* the records whole: a finished ray's walk is never read */
+            rt_store_hits16(hits + i, (int16)(-1), r.tmax, (float16)0.0f, (float16)0.0f, visited,
+                            (uint16)0u);
+            rt_store_walks16(walk + i, cx, cy, cz, pos);
+            if (rt_any16(done))
+                rt_stream_maxima(maxima, (uint)rt_minmax16(as_int16(visited), done).y, 0u);
+            uint8 v8 = visited.lo + visited.hi;
+            uint4 v4 = v8.lo + v8.hi;
+            visited_all += v4.x + v4.y + v4.z + v4.w;
+            continue;
+#endif
             int wc[4][16];
             uint vs[16], nx[16];
             float tm[16];
@@ -282,8 +296,6 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
                 rt_stream_retire(nx[l], maxima, vs[l], 0u, walk, i + l, w);
                 visited_all += vs[l];
             }
-            done_all += (uint)popcount((uint)sluice_mask16(done));
-            entered_all += (uint)popcount((uint)sluice_mask16(in));
         }
         for (; i < hi; ++i) {
             int in = rt_setup_one(&g, rays, codes, walk, hits, i);
