@@ -131,8 +131,8 @@ static sluice_status prepare(rt_tracer *t, size_t n)
     t->state_capacity = n;
     sluice_output_mode mode = t->opt.ordered ? SLUICE_ORDERED : SLUICE_UNORDERED;
 
-    /* rt_setup(rays, codes, walk, hits, maxima, cell_start, g): rays and hits
-     * bound per call */
+    /* rt_setup(rays, codes, walk, hits, maxima, cell_start, g, voxel_bits):
+     * rays and hits bound per call */
     sluice_kernel *k = t->k_setup;
     st = sluice_kernel_set_stream(k, 1, t->codes, 1);
     if (st == SLUICE_OK)
@@ -144,9 +144,12 @@ static sluice_status prepare(rt_tracer *t, size_t n)
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(k, 6, sizeof t->grid_args, &t->grid_args);
     if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 7, t->voxel_bits, 0);
+    if (st == SLUICE_OK)
         st = sluice_kernel_set_counters(k, t->counters);
 
-    /* rt_traverse(ids, codes, walk, rays, hits, maxima, cell_start, g) and
+    /* rt_traverse(ids, codes, walk, rays, hits, maxima, cell_start, g,
+     * voxel_bits) and
      * rt_intersect(ids, codes, walk, rays, hits, maxima, cell_start,
      * cell_tris, tv, g) */
     sluice_kernel *heavy[2] = {t->k_traverse, t->k_intersect};
@@ -168,6 +171,8 @@ static sluice_status prepare(rt_tracer *t, size_t n)
     }
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(t->k_traverse, 7, sizeof t->grid_args, &t->grid_args);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(t->k_traverse, 8, t->voxel_bits, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(t->k_intersect, 7, t->grid.cell_tris, 0);
     if (st == SLUICE_OK)

@@ -224,6 +224,31 @@ static sluice_status build_macro_cells(rt_tracer *t)
     return st;
 }
 
+/* One bit per voxel, set where the voxel holds triangles (rt_voxel_bits):
+ * what the stream mode's walks test at each voxel. */
+static sluice_status build_voxel_bits(rt_tracer *t)
+{
+    size_t cells = (size_t)t->grid.desc.dims[0] * t->grid.desc.dims[1] * t->grid.desc.dims[2];
+    size_t words = (cells + 31u) / 32u;
+    uint32_t n = (uint32_t)cells;
+    sluice_kernel *k = NULL;
+    sluice_status st = sluice_stream_create(t->ctx, sizeof(uint32_t), words, &t->voxel_bits);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(t->program, "rt_voxel_bits", &k);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 0, t->grid.cell_start, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 1, sizeof n, &n);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 2, t->voxel_bits, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(k, words);
+    if (st == SLUICE_OK)
+        st = sluice_context_finish(t->ctx);
+    sluice_kernel_destroy(k);
+    return st;
+}
+
 /* The list-order copy of the triangle records (rt_list_records). */
 static sluice_status build_list_copy(rt_tracer *t)
 {
@@ -343,6 +368,8 @@ sluice_status rt_tracer_create(sluice_context *ctx, const sr_scene *scene,
         sr_set_error(err, err_size, "list copy: %s", sluice_context_error(ctx));
     if (st == SLUICE_OK && (st = build_macro_cells(t)) != SLUICE_OK)
         sr_set_error(err, err_size, "macro cells: %s", sluice_context_error(ctx));
+    if (st == SLUICE_OK && (st = build_voxel_bits(t)) != SLUICE_OK)
+        sr_set_error(err, err_size, "voxel bits: %s", sluice_context_error(ctx));
     static const char *const ctr_names[] = {"voxels", "tests",          "done",
                                             "slices", "slices skipped", "entered"};
     if (st == SLUICE_OK)
@@ -385,6 +412,7 @@ void rt_tracer_destroy(rt_tracer *t)
     rt_grid_device_free(&t->grid);
     sluice_stream_destroy(t->list_records);
     sluice_stream_destroy(t->macro_cells);
+    sluice_stream_destroy(t->voxel_bits);
     sr_device_scene_destroy(t->ds);
     free(t);
 }

@@ -37,6 +37,7 @@ struct rt_tracer {
     int walks_ahead;
     int slices;                 /* coherent packets slice by slice (RT_FUSED_SLICES) */
     sluice_stream *macro_cells; /* uchar per block of voxels (rt_macro_cells) */
+    sluice_stream *voxel_bits;  /* a bit per voxel, set when it holds triangles (rt_voxel_bits) */
     sluice_stream *list_records;
     size_t list_stride; /* floats per plane of list_records */
     char fused_path[192];

@@ -74,25 +74,25 @@ inline int16 rt_step16(const rt_grid_args *g, const rt_packet *r, int16 go, int1
 /* Up to RT_UNROLL_STEPS voxels of the rays in the lanes of `active`, from
  * voxel (cx, cy, cz) on, as rt_traverse_one takes them: a non-empty voxel
  * sets the lane in *found and its list's start in *pos; leaving the grid, or
- * passing the ray's end, sets it in *done. Adds the voxels visited. Inlined,
- * so that the state stays in registers. */
-__attribute__((always_inline)) inline void rt_traverse16(const rt_grid_args *g, const rt_packet *r,
-                                                         global const uint *cell_start,
-                                                         int16 active, int16 *cx, int16 *cy,
-                                                         int16 *cz, uint16 *pos, uint16 *visited,
-                                                         int16 *found, int16 *done)
+ * passing the ray's end, sets it in *done. Adds the voxels visited. Each
+ * step reads the voxel's bit (rt_voxel_bits), a map small enough to stay in
+ * the first-level cache, and the lanes that stopped read their list starts
+ * once at the end; reading both list bounds at every step was slower
+ * (bench/README.md). Inlined, so that the state stays in registers. */
+__attribute__((always_inline)) inline void
+rt_traverse16(const rt_grid_args *g, const rt_packet *r, global const uint *cell_start,
+              global const uint *bits, int16 active, int16 *cx, int16 *cy, int16 *cz, uint16 *pos,
+              uint16 *visited, int16 *found, int16 *done)
 {
+    int16 stopped = (int16)0;
     for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
         if (!rt_any16(active))
             break;
         *visited += as_uint16(active) & (uint16)1u;
         int16 ci = rt_cell_index16(g, *cx, *cy, *cz);
-        int16 ai, bi;
-        rt_cell_bounds16(cell_start, ci, active, &ai, &bi);
-        uint16 a = as_uint16(ai), b = as_uint16(bi);
-        int16 f = active & as_int16(a < b);
-        *pos = select(*pos, a, as_uint16(f));
-        *found |= f;
+        int16 word = rt_gather_i(bits, ci >> 5, active);
+        int16 f = active & (((word >> (ci & 31)) & 1) != 0);
+        stopped |= f;
         active &= ~f;
         int16 axis;
         float16 te = rt_voxel_exit16(g, r, *cx, *cy, *cz, &axis);
@@ -101,6 +101,11 @@ __attribute__((always_inline)) inline void rt_traverse16(const rt_grid_args *g, 
         int16 out = rt_step16(g, r, go, axis, cx, cy, cz);
         *done |= leave | out;
         active &= ~(leave | out);
+    }
+    if (rt_any16(stopped)) {
+        int16 ci = rt_cell_index16(g, *cx, *cy, *cz);
+        *pos = select(*pos, as_uint16(rt_gather_i(cell_start, ci, stopped)), as_uint16(stopped));
+        *found |= stopped;
     }
 }
 
@@ -221,7 +226,7 @@ inline uint rt_traverse_one(const rt_grid_args *g, global const rt_ray *rays, gl
  * ray's index as its id). */
 __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *codes,
                        global rt_walk *walk, global rt_hit *hits, global uint *maxima,
-                       global const uint *cell_start, const rt_grid_args g)
+                       global const uint *cell_start, const rt_grid_args g, global const uint *bits)
 {
     SLUICE_FOR_EACH_RANGE (lo, hi) {
         const uint16 lane =
@@ -255,7 +260,8 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
             int16 cx = c[0], cy = c[1], cz = c[2];
             uint16 pos = (uint16)0u, visited = (uint16)0u;
             int16 done = ~in, found = (int16)0;
-            rt_traverse16(&g, &r, cell_start, in, &cx, &cy, &cz, &pos, &visited, &found, &done);
+            rt_traverse16(&g, &r, cell_start, bits, in, &cx, &cy, &cz, &pos, &visited, &found,
+                          &done);
             uint16 next = rt_next16(found, done);
             vstore16(next, 0, codes + i);
             done_all += (uint)popcount((uint)sluice_mask16(done));
@@ -317,7 +323,8 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
  * the ray's end, finishes it as a miss. Blocks of 16 rays run in lanes. */
 __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *codes,
                           global rt_walk *walk, global const rt_ray *rays, global rt_hit *hits,
-                          global uint *maxima, global const uint *cell_start, const rt_grid_args g)
+                          global uint *maxima, global const uint *cell_start, const rt_grid_args g,
+                          global const uint *bits)
 {
     SLUICE_FOR_EACH_RANGE (lo, hi) {
         uint i = lo, visited_all = 0u, done_all = 0u;
@@ -333,8 +340,8 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
             rt_walk16_load(rays, walk, idv, &r, &cx, &cy, &cz, &pos);
             int16 done = (int16)0, found = (int16)0;
             uint16 visited = (uint16)0u;
-            rt_traverse16(&g, &r, cell_start, (int16)-1, &cx, &cy, &cz, &pos, &visited, &found,
-                          &done);
+            rt_traverse16(&g, &r, cell_start, bits, (int16)-1, &cx, &cy, &cz, &pos, &visited,
+                          &found, &done);
             uint16 next = rt_next16(found, done);
             vstore16(next, 0, codes + i);
             uint vs[16], nx[16];
@@ -623,5 +630,21 @@ __kernel void rt_route_setup(SLUICE_PARAMS, global const uint *codes, global uin
             SLUICE_EMIT_IF(0, trav, i, cd == RT_NEXT_TRAVERSE);
             SLUICE_EMIT_IF(1, isect, i, cd == RT_NEXT_INTERSECT);
         }
+    }
+}
+
+/* The voxel map of rt_traverse16: bit b of word i is set when voxel
+ * 32i + b (of `cells`) holds triangles. */
+__kernel void rt_voxel_bits(SLUICE_PARAMS, global const uint *cell_start, uint cells,
+                            global uint *bits)
+{
+    SLUICE_FOR_EACH (i) {
+        uint w = 0u;
+        for (uint b = 0; b < 32u; ++b) {
+            uint c = 32u * i + b;
+            if (c < cells && cell_start[c] < cell_start[c + 1u])
+                w |= 1u << b;
+        }
+        bits[i] = w;
     }
 }
