@@ -1309,7 +1309,7 @@ int main(int argc, char **argv)
         fprintf(
             f,
             "  \"setup\": {\"width\": %u, \"height\": %u, \"rays_per_pixel\": 1, \"rays\": "
-            "\"primary, through the pixel centres, the scene's camera, 8x8-tile order\", "
+            "\"primary, through the pixel centres, the scene's camera, 8x8 tiles of 4x4 blocks\", "
             "\"bounce_rays\": \"diffuse bounce: one per pixel whose primary ray hit (the C "
             "tracer's hits), from the hit point offset by scene_eps (sr_scene_epsilon) along "
             "the geometric normal facing the ray, cosine-weighted about it from a hash of the "

@@ -6,7 +6,10 @@
 #include "sluice.cl"
 
 /* One eye ray per pixel, in 8x8 tiles so that neighbouring rays (which take
- * nearly the same path through the grid) are neighbours in the stream. The
+ * nearly the same path through the grid) are neighbours in the stream, each
+ * tile as four 4x4 blocks (left to right, top to bottom), so that the 16
+ * rays of a packet (rt_lanes.cl) are a square rather than two rows: the
+ * fused mode's coherent packets cross fewer voxels (bench/README.md). The
  * launch covers whole tiles, those listed in `tiles` (the ones still taking
  * samples, apps/render/adaptive.h); positions outside the image emit
  * nothing. Output 0 (ordered) receives the rays, each adding to its pixel's
@@ -19,8 +22,8 @@ __kernel void rt_raygen(SLUICE_PARAMS, global rt_ray *rays, const rt_frame f,
     SLUICE_FOR_EACH (i) {
         uint tiles_x = (f.width + 7u) / 8u;
         uint tile = tiles[i / 64u], within = i % 64u;
-        uint x = (tile % tiles_x) * 8u + within % 8u;
-        uint y = (tile / tiles_x) * 8u + within / 8u;
+        uint x = (tile % tiles_x) * 8u + (within >> 4 & 1u) * 4u + (within & 3u);
+        uint y = (tile / tiles_x) * 8u + (within >> 5) * 4u + (within >> 2 & 3u);
         int inside = x < f.width && y < f.height;
         uint at = SLUICE_EMIT_INDEX(0, inside);
         if (SLUICE_WRITING && inside) {
