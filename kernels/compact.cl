@@ -32,6 +32,20 @@
  * knows), so without this each block's loads wait behind the previous
  * block's stores. It matters with AVX2 kernels (measured in
  * bench/README.md, bench_streams). */
+/* COMPACT_NEXT: an unordered output's chunk is counted, then written, so
+ * while a chunk is written (its records already in the cache) the memory
+ * bus would idle; the block kernels ask for the two lines at the same place
+ * of the next chunk, which on a CPU the same thread runs next (PoCL runs a
+ * group's work-items one after another), and its count pass finds them in
+ * the cache (bench/README.md, bench_streams). */
+#define COMPACT_NEXT_(p, i, len)                                                                   \
+    do {                                                                                           \
+        if (SLUICE_WRITING) {                                                                      \
+            SLUICE_PREFETCH((p) + (i) + (len));                                                    \
+            SLUICE_PREFETCH((p) + (i) + 16u + (len));                                              \
+        }                                                                                          \
+    } while (0)
+
 #if SLUICE_EMIT16_FAST
 __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint *flags,
                          global uint *out)
@@ -39,8 +53,14 @@ __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint
     SLUICE_FOR_EACH_RANGE (b, e) {
         uint i = b;
         for (; SLUICE_EMIT16_FAST && i + 32u <= e; i += 32u) {
-            /* two blocks, loaded before either is emitted (COMPACT_AHEAD) */
-            uint16 x = SLUICE_LOAD16(in + i), y = SLUICE_LOAD16(in + i + 16u);
+            /* two blocks, loaded before either is emitted (COMPACT_AHEAD);
+             * the records only in the pass that writes them */
+            uint16 x = (uint16)0u, y = (uint16)0u;
+            if (SLUICE_WRITING) {
+                x = SLUICE_LOAD16(in + i);
+                y = SLUICE_LOAD16(in + i + 16u);
+            }
+            COMPACT_NEXT_(flags, i, e - b);
             ushort mx = sluice_mask16(as_int16(SLUICE_LOAD16(flags + i) != (uint16)0u));
             ushort my = sluice_mask16(as_int16(SLUICE_LOAD16(flags + i + 16u) != (uint16)0u));
             SLUICE_EMIT16(0, out, x, mx);
@@ -141,7 +161,10 @@ __kernel void split_w1(SLUICE_PARAMS, global const uint *in, global const uint *
     SLUICE_FOR_EACH_RANGE (lo, hi) {
         uint i = lo;
         for (; SLUICE_EMIT16_FAST && i + 16u <= hi; i += 16u) {
-            uint16 x = SLUICE_LOAD16(in + i), bv = SLUICE_LOAD16(buckets + i);
+            uint16 bv = SLUICE_LOAD16(buckets + i), x = (uint16)0u;
+            if (SLUICE_WRITING) /* the records only in the pass that writes them */
+                x = SLUICE_LOAD16(in + i);
+            COMPACT_NEXT_(buckets, i, hi - lo);
             SPLIT16_SLOT_(0, o0);
             SPLIT16_SLOT_(1, o1);
             SPLIT16_SLOT_(2, o2);
@@ -204,6 +227,7 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
             uint i = b;                                                                            \
             for (; SLUICE_EMIT16_FAST && i + 32u <= e; i += 32u) { /* COMPACT_AHEAD */             \
                 uint16 x = SLUICE_LOAD16(in + i), y = SLUICE_LOAD16(in + i + 16u);                 \
+                COMPACT_NEXT_(in, i, e - b);                                                       \
                 ushort mx = sluice_mask16(as_int16(AS16(x) < (T16)t));                             \
                 ushort my = sluice_mask16(as_int16(AS16(y) < (T16)t));                             \
                 SLUICE_EMIT16(0, below, x, mx);                                                    \
