@@ -577,11 +577,8 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
             atomic_max(&maxima[0], (uint)ms.y);
         if ((uint)mt.y > maxima[1])
             atomic_max(&maxima[1], (uint)mt.y);
-        uint16 s8 = steps;
-        uint8 a8 = s8.lo + s8.hi, b8 = tests.lo + tests.hi;
-        uint4 a4 = a8.lo + a8.hi, b4 = b8.lo + b8.hi;
-        *steps_sum += a4.x + a4.y + a4.z + a4.w;
-        *tests_sum += b4.x + b4.y + b4.z + b4.w;
+        *steps_sum += rt_sum16(steps);
+        *tests_sum += rt_sum16(tests);
         return;
     }
 #endif

@@ -145,6 +145,14 @@ inline int rt_any16(int16 m)
 #endif
 }
 
+/* The sum of the 16 lanes of x. */
+inline uint rt_sum16(uint16 x)
+{
+    uint8 a = x.lo + x.hi;
+    uint4 b = a.lo + a.hi;
+    return b.x + b.y + b.z + b.w;
+}
+
 /* rt_any16 for 8 lanes (one AVX2 register). */
 inline int rt_any8(int8 m)
 {
@@ -297,7 +305,9 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
 /* The Moller-Trumbore test of rt_intersect_tri, lanewise on vectors of type
  * F (floats) and I (ints) of one width: rays (o, d, tmin) against triangles
  * (v0, e1, e2) in the lanes of mask m, keeping hits nearer than t and not
- * past limit in (tri, t, u, v), which are lvalues. */
+ * past limit in (tri, t, u, v), which are lvalues. With quit set (a
+ * constant) it stops after u when `any` (rt_any16 or rt_any8) finds no lane
+ * left (rt_intersect16_core). */
 #define RT_MT_(F, I, quit, any, itri, mask, ox, oy, oz, dx, dy, dz, tmin, limit, tri, t, u, v,     \
                v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z)                                        \
     do {                                                                                           \

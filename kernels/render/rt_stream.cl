@@ -273,11 +273,8 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
             rt_store_walks16(walk + i, cx, cy, cz, pos);
             if (rt_any16(done))
                 rt_stream_maxima(maxima, (uint)rt_minmax16(as_int16(visited), done).y, 0u);
-            uint8 v8 = visited.lo + visited.hi;
-            uint4 v4 = v8.lo + v8.hi;
-            visited_all += v4.x + v4.y + v4.z + v4.w;
-            continue;
-#endif
+            visited_all += rt_sum16(visited);
+#else
             int wc[4][16];
             uint vs[16], nx[16];
             float tm[16];
@@ -302,6 +299,7 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
                 rt_stream_retire(nx[l], maxima, vs[l], 0u, walk, i + l, w);
                 visited_all += vs[l];
             }
+#endif
         }
         for (; i < hi; ++i) {
             int in = rt_setup_one(&g, rays, codes, walk, hits, i);
