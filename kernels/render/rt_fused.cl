@@ -615,10 +615,12 @@ __kernel void rt_trace_fused(SLUICE_PARAMS, global const rt_ray *rays, global rt
 {
 #ifdef RT_PACKET
     SLUICE_FOR_EACH_RANGE (b, e) {
-        uint steps = 0u, tests = 0u, slices[2] = {0u, 0u};
+        uint steps = 0u, tests = 0u, slices[2] = {0u, 0u}, n = SLUICE_LENGTH;
         for (uint p = b; p < e; p += 16u) {
-            /* the next packet's rays, one line each, while this one runs */
-            for (uint q = p + 16u; q < min(p + 32u, e); ++q)
+            /* the next packet's rays, one line each, while this one runs;
+             * past the chunk's end too: on a CPU the same thread takes the
+             * next chunk next (PoCL runs a group's work-items in turn) */
+            for (uint q = p + 16u; q < min(p + 32u, n); ++q)
                 SLUICE_PREFETCH(rays + q);
             rt_trace_packet(&g, rays, p, min(16u, e - p), hits, maxima, cell_start, cell_tris, tv,
                             lists, macro, &steps, &tests, slices);

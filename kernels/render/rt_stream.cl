@@ -232,9 +232,11 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
         const uint16 lane =
             (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
         uint i = lo, visited_all = 0u, done_all = 0u, entered_all = 0u;
+        uint n = SLUICE_LENGTH;
         for (; i + 16u <= hi; i += 16u) {
-            /* the next block's rays, one line each (SLUICE_PREFETCH) */
-            for (uint q = i + 16u; q < min(i + 32u, hi); ++q)
+            /* the next block's rays, one line each (SLUICE_PREFETCH), past
+             * the chunk's end too (rt_trace_fused) */
+            for (uint q = i + 16u; q < min(i + 32u, n); ++q)
                 SLUICE_PREFETCH(rays + q);
             rt_packet r;
             rt_packet_load(rays, as_int16((uint16)i + lane), (int16)-1, &r);
