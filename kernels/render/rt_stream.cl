@@ -165,7 +165,9 @@ inline int rt_setup_one(const rt_grid_args *g, global const rt_ray *rays, global
 
 /* The records of the next block of rays of a pass, ids[from .. from + 16)
  * (those below `end`): its rays, walk states and, where given, hits, one
- * line each, while this block runs (SLUICE_PREFETCH). */
+ * line each, while this block runs (SLUICE_PREFETCH). The callers pass the
+ * stream's length as `end`, so the last block of a chunk asks for the next
+ * chunk's first (rt_trace_fused). */
 inline void rt_stream_prefetch(global const uint *ids, uint from, uint end,
                                global const rt_ray *rays, global const rt_walk *walk,
                                global const rt_hit *hits)
@@ -327,12 +329,12 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
                           global const uint *bits)
 {
     SLUICE_FOR_EACH_RANGE (lo, hi) {
-        uint i = lo, visited_all = 0u, done_all = 0u;
+        uint i = lo, visited_all = 0u, done_all = 0u, n = SLUICE_LENGTH;
         for (; i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
             uint id[16];
             vstore16(idv, 0, id);
-            rt_stream_prefetch(ids, i + 16u, hi, rays, walk, 0);
+            rt_stream_prefetch(ids, i + 16u, n, rays, walk, 0);
             int wc[4][16];
             rt_packet r;
             int16 cx, cy, cz;
@@ -466,13 +468,13 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                            const rt_grid_args g, global const float *lists)
 {
     SLUICE_FOR_EACH_RANGE (lo, hi) {
-        uint i = lo, tested_all = 0u, visited_all = 0u, done_all = 0u;
+        uint i = lo, tested_all = 0u, visited_all = 0u, done_all = 0u, n = SLUICE_LENGTH;
 #ifndef RT_WATERTIGHT
         for (; i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
             uint id[16];
             vstore16(idv, 0, id);
-            rt_stream_prefetch(ids, i + 16u, hi, rays, walk, hits);
+            rt_stream_prefetch(ids, i + 16u, n, rays, walk, hits);
             int wc[4][16];
             rt_packet r;
             int16 cx, cy, cz;
