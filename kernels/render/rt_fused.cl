@@ -436,7 +436,12 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
     int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     int16 live = lane < (int)count;
     rt_packet P;
-    rt_packet_load(rays, (int)first + lane, live, &P);
+#ifdef RT_AOS16_
+    if (count == 16u)
+        rt_packet_load_run(rays, first, &P);
+    else
+#endif
+        rt_packet_load(rays, (int)first + lane, live, &P);
     /* rt_grid_enter, lane by lane the same operations */
     int16 nzx = P.dx != 0.0f, nzy = P.dy != 0.0f, nzz = P.dz != 0.0f;
     float16 t0 = P.tmin, t1 = P.tmax;

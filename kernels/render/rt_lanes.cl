@@ -244,6 +244,20 @@ inline int2 rt_minmax16(int16 x, int16 m)
     return (int2)(min(l2.x, l2.y), max(h2.x, h2.y));
 }
 
+/* The rest of a packet's load, its rays' o, d, tmin and tmax read: the
+ * inverse directions, the any-hit flags (from the rays' flags), no hit yet. */
+inline void rt_packet_start_(rt_packet *P, int16 flags)
+{
+    P->ix = select((float16)0.0f, 1.0f / P->dx, P->dx != 0.0f);
+    P->iy = select((float16)0.0f, 1.0f / P->dy, P->dy != 0.0f);
+    P->iz = select((float16)0.0f, 1.0f / P->dz, P->dz != 0.0f);
+    P->any_hit = (flags & (int)RT_FLAG_ANY_HIT) != 0;
+    P->tri = (int16)(-1);
+    P->t = P->tmax;
+    P->u = (float16)0.0f;
+    P->v = (float16)0.0f;
+}
+
 /* Loads rays idx[l] (in the lanes where live is set) as rt_prepare does, with
  * no hit yet: tri -1 (RT_NO_HIT), t = tmax. */
 inline void rt_packet_load(global const rt_ray *rays, int16 idx, int16 live, rt_packet *P)
@@ -258,16 +272,63 @@ inline void rt_packet_load(global const rt_ray *rays, int16 idx, int16 live, rt_
     P->dz = rt_gather_f(rf, at + 5, live);
     P->tmin = rt_gather_f(rf, at + 6, live);
     P->tmax = rt_gather_f(rf, at + 7, live);
-    int16 flags = rt_gather_i((global const uint *)rf, at + 13, live);
-    P->ix = select((float16)0.0f, 1.0f / P->dx, P->dx != 0.0f);
-    P->iy = select((float16)0.0f, 1.0f / P->dy, P->dy != 0.0f);
-    P->iz = select((float16)0.0f, 1.0f / P->dz, P->dz != 0.0f);
-    P->any_hit = (flags & (int)RT_FLAG_ANY_HIT) != 0;
-    P->tri = (int16)(-1);
-    P->t = P->tmax;
-    P->u = (float16)0.0f;
-    P->v = (float16)0.0f;
+    rt_packet_start_(P, rt_gather_i((global const uint *)rf, at + 13, live));
 }
+
+#ifdef RT_AOS16_
+/* Stage s of an 8x8 transpose in each half of 16 lanes, on rows a (bit s of
+ * the row clear) and b: lane L of each as an index into (a, b). */
+#define RT_TR_A_(s, L) (((L) & (1 << (s))) ? 16 + (L) - (1 << (s)) : (L))
+#define RT_TR_B_(s, L) (((L) & (1 << (s))) ? 16 + (L) : (L) + (1 << (s)))
+#define RT_TR16_(M, s)                                                                             \
+    M(s, 0), M(s, 1), M(s, 2), M(s, 3), M(s, 4), M(s, 5), M(s, 6), M(s, 7), M(s, 8), M(s, 9),      \
+        M(s, 10), M(s, 11), M(s, 12), M(s, 13), M(s, 14), M(s, 15)
+#define RT_TR_PAIR_(a, b, s)                                                                       \
+    do {                                                                                           \
+        float16 a_ = (a), b_ = (b);                                                                \
+        (a) = __builtin_shufflevector(a_, b_, RT_TR16_(RT_TR_A_, s));                              \
+        (b) = __builtin_shufflevector(a_, b_, RT_TR16_(RT_TR_B_, s));                              \
+    } while (0)
+/* Stage s on the four row pairs (a, b), (c, d), (e, f), (g, h). */
+#define RT_TR_STAGE_(s, a, b, c, d, e, f, g, h)                                                    \
+    do {                                                                                           \
+        RT_TR_PAIR_(a, b, s);                                                                      \
+        RT_TR_PAIR_(c, d, s);                                                                      \
+        RT_TR_PAIR_(e, f, s);                                                                      \
+        RT_TR_PAIR_(g, h, s);                                                                      \
+    } while (0)
+/* The first 8 fields of rays r and r + 8 of 16 at p, side by side. */
+#define RT_TR_ROWS_(p, r)                                                                          \
+    __builtin_shufflevector(vload16((r), (p)), vload16((r) + 8, (p)), 0, 1, 2, 3, 4, 5, 6, 7, 16,  \
+                            17, 18, 19, 20, 21, 22, 23)
+
+/* rt_packet_load for the 16 rays from `first` on. A ray record is one
+ * 64-byte line, so each ray is one vector load, and the 8 fields the packet
+ * takes (o, d, tmin, tmax) are turned into 8 vectors of 16 lanes by three
+ * stages of permutes, where 8 gathers take 16 loads each (measured in
+ * bench/README.md). */
+inline void rt_packet_load_run(global const rt_ray *rays, uint first, rt_packet *P)
+{
+    global const float *rf = (global const float *)(rays + first);
+    float16 x0 = RT_TR_ROWS_(rf, 0), x1 = RT_TR_ROWS_(rf, 1), x2 = RT_TR_ROWS_(rf, 2);
+    float16 x3 = RT_TR_ROWS_(rf, 3), x4 = RT_TR_ROWS_(rf, 4), x5 = RT_TR_ROWS_(rf, 5);
+    float16 x6 = RT_TR_ROWS_(rf, 6), x7 = RT_TR_ROWS_(rf, 7);
+    /* rows 2^s apart pair up at stage s */
+    RT_TR_STAGE_(0, x0, x1, x2, x3, x4, x5, x6, x7);
+    RT_TR_STAGE_(1, x0, x2, x1, x3, x4, x6, x5, x7);
+    RT_TR_STAGE_(2, x0, x4, x1, x5, x2, x6, x3, x7);
+    P->ox = x0;
+    P->oy = x1;
+    P->oz = x2;
+    P->dx = x3;
+    P->dy = x4;
+    P->dz = x5;
+    P->tmin = x6;
+    P->tmax = x7;
+    int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    rt_packet_start_(P, rt_gather_i((global const uint *)rf, lane * 16 + 13, (int16)(-1)));
+}
+#endif
 
 /* rt_voxel_exit in 16 lanes: the exit parameter of voxel (cx, cy, cz) and the
  * axis (0, 1, 2) the ray leaves it through. */
