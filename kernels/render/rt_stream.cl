@@ -39,7 +39,16 @@
 inline void rt_walk16_load(global const rt_ray *rays, global const rt_walk *walk, uint16 ids,
                            rt_packet *r, int16 *cx, int16 *cy, int16 *cz, uint16 *pos)
 {
-    rt_packet_load(rays, as_int16(ids), (int16)-1, r);
+#ifdef RT_AOS16_
+    /* ids in a run (a pass's stream keeps most of its chunks' order): the
+     * rays are neighbours, read as whole lines (rt_packet_load_run) */
+    const uint16 lane =
+        (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+    if (sluice_mask16(as_int16(ids == (uint16)ids.s0 + lane)) == (ushort)0xffffu)
+        rt_packet_load_run(rays, ids.s0, r);
+    else
+#endif
+        rt_packet_load(rays, as_int16(ids), (int16)-1, r);
     global const uint *w = (global const uint *)walk;
     int16 at = as_int16(ids) * 4;
     *cx = rt_gather_i(w, at, (int16)-1);
