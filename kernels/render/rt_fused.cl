@@ -577,11 +577,8 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
     if (count == 16u) {
         rt_store_hits16(hits + first, P.tri, P.t, P.u, P.v, steps, tests);
         int16 all = (int16)(-1);
-        int2 ms = rt_minmax16(as_int16(steps), all), mt = rt_minmax16(as_int16(tests), all);
-        if ((uint)ms.y > maxima[0])
-            atomic_max(&maxima[0], (uint)ms.y);
-        if ((uint)mt.y > maxima[1])
-            atomic_max(&maxima[1], (uint)mt.y);
+        rt_maxima_add(maxima, (uint)rt_minmax16(as_int16(steps), all).y,
+                      (uint)rt_minmax16(as_int16(tests), all).y);
         *steps_sum += rt_sum16(steps);
         *tests_sum += rt_sum16(tests);
         return;

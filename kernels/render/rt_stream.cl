@@ -125,23 +125,13 @@ inline uint16 rt_next16(int16 found, int16 done)
                   (uint16)RT_NEXT_DONE, as_uint16(done));
 }
 
-/* A ray is done: keep the largest per-ray step and test counts (read first,
- * so the atomic is rare). Its hit record is already in place. */
-inline void rt_stream_maxima(global uint *maxima, uint steps, uint tests)
-{
-    if (steps > maxima[0])
-        atomic_max(&maxima[0], steps);
-    if (tests > maxima[1])
-        atomic_max(&maxima[1], tests);
-}
-
 /* Ends a ray's pass: a finished ray adds its counts to the per-ray maxima
  * (Purcell Table 5.2), a live one saves its walk for the next pass. */
 inline void rt_stream_retire(uint next, global uint *maxima, uint steps, uint tests,
                              global rt_walk *walk, uint id, rt_walk w)
 {
     if (next == RT_NEXT_DONE)
-        rt_stream_maxima(maxima, steps, tests);
+        rt_maxima_add(maxima, steps, tests);
     else
         walk[id] = w;
 }
@@ -285,7 +275,7 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
                             (uint16)0u);
             rt_store_walks16(walk + i, cx, cy, cz, pos);
             if (rt_any16(done))
-                rt_stream_maxima(maxima, (uint)rt_minmax16(as_int16(visited), done).y, 0u);
+                rt_maxima_add(maxima, (uint)rt_minmax16(as_int16(visited), done).y, 0u);
             visited_all += rt_sum16(visited);
 #else
             int wc[4][16];

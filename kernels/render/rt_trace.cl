@@ -276,6 +276,16 @@ inline void rt_intersect_list(global const uint *cell_tris, global const float *
         rt_intersect_tri(tv, cell_tris[k], r, limit, best);
 }
 
+/* A ray is done: keep the largest per-ray step and test counts (Purcell's
+ * Table 5.2 maxima), read first, so that the atomic is rare. */
+inline void rt_maxima_add(global uint *maxima, uint steps, uint tests)
+{
+    if (steps > maxima[0])
+        atomic_max(&maxima[0], steps);
+    if (tests > maxima[1])
+        atomic_max(&maxima[1], tests);
+}
+
 /* Writes the final hit of a ray and keeps the largest per-ray step and test
  * counts in maxima[0] and maxima[1] (read first, so the atomic is rare). */
 inline void rt_finish_hit(global rt_hit *hits, uint ray, const rt_best *best, uint steps,
@@ -289,10 +299,7 @@ inline void rt_finish_hit(global rt_hit *hits, uint ray, const rt_best *best, ui
     h.steps = steps;
     h.tests = tests;
     hits[ray] = h;
-    if (steps > maxima[0])
-        atomic_max(&maxima[0], steps);
-    if (tests > maxima[1])
-        atomic_max(&maxima[1], tests);
+    rt_maxima_add(maxima, steps, tests);
 }
 
 inline rt_best rt_no_hit(const rt_rayp *r)
