@@ -25,6 +25,19 @@
 #define RT_EMIT_SECONDARY(cond, ray) SLUICE_EMIT_IF(1, secondary, ray, cond)
 #define RT_EMIT_GATHER(cond, g) SLUICE_EMIT_IF(2, gather, g, cond)
 
+/* What an area-light sample at L (from the shading point, offset) adds when
+ * unblocked: f cos cos_l / d^2 over the sample's pdf (per_sample: the
+ * lights' area over the samples taken); lc is the light's normal, not of
+ * unit length. */
+inline float3 rt_area_light_weight(const rt_surface *s, float3 wo, float3 w, float3 L, float3 lc,
+                                   float3 le, float per_sample)
+{
+    float d2 = dot(L, L), dist = sqrt(d2);
+    float3 wi = L / dist;
+    float c = dot(s->n, wi), cl = -dot(normalize(lc), wi);
+    return w * rt_brdf(&s->m, s->n, wi, wo) * le * (c * cl / d2 * per_sample);
+}
+
 /* Shades rays [base, base + count) of a wave (launched over count). */
 __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt_hit *hits,
                        uint base, global rt_ray *shadow, global rt_ray *secondary,
@@ -79,29 +92,30 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
             SLUICE_COUNT(1, go);
         }
         uint nl = (lit && f.area_lights) ? f.light_samples : 0u;
+        float per_sample = f.area_total / (float)f.light_samples;
+        float3 reach = w * rt_brdf_support(&s.m);
         for (uint k = 0u; k < nl; ++k) {
             /* pick an emissive triangle by area, then a uniform point on it;
              * the hit's samples stratified over the lights together */
             float2 u = rt_sobol2(k, rt_key(ray.key, 16u));
-            float3 q, ln;
+            float3 q, lc;
             uint lt =
-                rt_area_light_sample(u.x, u.y, f.area_lights, area_tris, area_cdf, tv, &q, &ln);
+                rt_area_light_point(u.x, u.y, f.area_lights, area_tris, area_cdf, tv, &q, &lc);
             rt_material lm = mats[tri_mat[lt]];
-            float3 L = q - (s.p + off);
-            float d2 = dot(L, L), dist = sqrt(d2);
-            float3 wi = L / dist;
-            float c = dot(s.n, wi), cl = -dot(ln, wi);
             float3 le = (float3)(lm.er, lm.eg, lm.eb);
-            float3 contrib = w * rt_brdf(&s.m, s.n, wi, wo) * le *
-                             (c * cl / d2 * f.area_total / (float)f.light_samples);
-            int go = lit && lt != h.tri && c > 0.0f && cl > 0.0f && dot(s.ng, wi) > 0.0f &&
-                     rt_max3(contrib) > 0.0f;
+            float3 L = q - (s.p + off);
+            /* whether the sample can add light, from signs and colours
+             * alone: the count pass (an emitting body runs twice) stops
+             * here, and only the writing pass normalizes and weighs */
+            int go = lit && lt != h.tri && dot(s.n, L) > 0.0f && dot(lc, L) < 0.0f &&
+                     dot(s.ng, L) > 0.0f && rt_max3(reach * le) > 0.0f;
             /* stop just short of the light's own surface: by a relative
              * 1e-5, far above the rounding of t (1e-7) and far below any gap
              * a scene would model (0.001 let light through walls it sat
              * just outside of: test_stress's leak case) */
-            RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, q, 0.99999f, contrib, ray.pixel,
-                                             RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
+            RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, q, 0.99999f,
+                                             rt_area_light_weight(&s, wo, w, L, lc, le, per_sample),
+                                             ray.pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
             SLUICE_COUNT(1, go);
         }
 #ifdef RT_GATHER

@@ -9,14 +9,15 @@
 
 /* Picks an emissive triangle with probability proportional to its area (u0)
  * and a uniform point `*q` on it (Shirley and Chiu's square-to-triangle map);
- * writes its unit normal (the emitting side) to `*ln` and returns the
- * triangle. `count` is the number of emissive triangles (> 0). The point's
- * first coordinate is u0 rescaled within the chosen triangle's share of the
- * CDF, so the map from (u0, u1) to the lights' surface keeps areas: points
- * stratified in the unit square stay stratified on the lights (rt_sobol2). */
-inline uint rt_area_light_sample(float u0, float u1, uint count, global const uint *area_tris,
-                                 global const float *area_cdf, global const float *tv, float3 *q,
-                                 float3 *ln)
+ * writes its normal (the emitting side, e1 x e2: not of unit length) to
+ * `*lc` and returns the triangle. `count` is the number of emissive
+ * triangles (> 0). The point's first coordinate is u0 rescaled within the
+ * chosen triangle's share of the CDF, so the map from (u0, u1) to the
+ * lights' surface keeps areas: points stratified in the unit square stay
+ * stratified on the lights (rt_sobol2). */
+inline uint rt_area_light_point(float u0, float u1, uint count, global const uint *area_tris,
+                                global const float *area_cdf, global const float *tv, float3 *q,
+                                float3 *lc)
 {
     uint lo = 0u, hi = count - 1u;
     while (lo < hi) {
@@ -33,7 +34,18 @@ inline uint rt_area_light_sample(float u0, float u1, uint count, global const ui
     rt_tri_edges(tv, lt, &a, &e1, &e2);
     float su = sqrt(ur);
     *q = a + e1 * (su * (1.0f - u1)) + e2 * (su * u1);
-    *ln = normalize(cross(e1, e2));
+    *lc = cross(e1, e2);
+    return lt;
+}
+
+/* rt_area_light_point with the unit normal in `*ln`. */
+inline uint rt_area_light_sample(float u0, float u1, uint count, global const uint *area_tris,
+                                 global const float *area_cdf, global const float *tv, float3 *q,
+                                 float3 *ln)
+{
+    float3 lc;
+    uint lt = rt_area_light_point(u0, u1, count, area_tris, area_cdf, tv, q, &lc);
+    *ln = normalize(lc);
     return lt;
 }
 

@@ -127,6 +127,16 @@ inline float rt_max3(float3 v)
     return fmax(v.x, fmax(v.y, v.z));
 }
 
+/* A colour that is zero exactly where rt_brdf is zero in every direction
+ * (its terms are non-negative): what decides, before any normalizing,
+ * whether direct light can reach the eye through the surface. */
+inline float3 rt_brdf_support(const rt_material *m)
+{
+    if (m->kind == 3u)
+        return rt_albedo(m) + rt_specular(m);
+    return (m->kind == 1u || m->kind == 2u) ? rt_specular(m) : rt_albedo(m);
+}
+
 /* The Fresnel reflectance of a dielectric for unpolarised light, from
  * Fresnel's equations (the mean of the s and p reflectances) with the
  * incident and transmitted cosines; `entering`: from outside (index 1)
