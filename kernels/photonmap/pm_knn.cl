@@ -217,8 +217,13 @@ static inline void pm_take8(pm_state *st, const pm_knn_params *p, global const f
 
 /* Runs shorter than this are examined one photon at a time: a block's setup
  * and sums cost more than it saves there (glassball, with Purcell's
- * 250x1x250 grid: runs of one cell of a few photons; measured). */
-#define PM_SHORT_RUN 8u
+ * 250x1x250 grid: runs of one cell of a few photons), while from four
+ * photons up the blocks' branch-free tests win (bench_knn's queries in
+ * random order most; measured, bench/README.md). */
+#define PM_SHORT_RUN 4u
+/* The same for a hashed grid's buckets, whose blocks also test each
+ * photon's cell: there eight stays the faster threshold (measured). */
+#define PM_SHORT_BUCKET 8u
 
 /* Examines the photons map[b .. e) (Purcell Fig. 6.6): in the cell-ordered
  * copy of the map (pm_knn_gather) a run of cells along x is one contiguous
@@ -612,7 +617,7 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
                                   global const float *map, global uint *indices)
 {
     uint stride = p->map_stride;
-    if (e - b < PM_SHORT_RUN) {
+    if (e - b < PM_SHORT_BUCKET) {
         for (uint j = b; j < e; ++j) {
             float x = map[PM_MAP_X * stride + j], y = map[PM_MAP_Y * stride + j],
                   z = map[PM_MAP_Z * stride + j];
