@@ -9,7 +9,11 @@
  *                  on every distance beside the shells'
  *   pm_knn_sat_*   (once per call) the summed-count table over the cells,
  *                  with which a pass jumps over shells without photons
- *   pm_knn_init    results zeroed, live = the batch's ids
+ *   pm_knn_order_keys + radix sort
+ *                  (once per call) the search order: the queries by cell,
+ *                  so that consecutive queries share cached photons
+ *   pm_knn_init    live = the batch's places in that order (results zeroed
+ *                  once per call, all of them)
  *   loop           while the live stream is not empty (sluice_loop watching
  *                  its length: Purcell's occlusion query, 6.3.3):
  *                    pm_knn_pass  one more shell per live query
@@ -40,6 +44,7 @@
 /* Arguments of pm_knn_pass after SLUICE_PARAMS. */
 enum {
     PASS_LIVE,
+    PASS_ORDER,
     PASS_QUERIES,
     PASS_MAP,
     PASS_MAP_START,
@@ -58,18 +63,21 @@ enum {
 struct pm_knn {
     sluice_context *ctx;
     sluice_program *prog;
-    sluice_kernel *k_gather, *k_bounds, *k_sat[3], *k_init, *k_pass, *k_live, *k_hash;
+    sluice_kernel *k_gather, *k_bounds, *k_sat[3], *k_order, *k_sortq, *k_unsort, *k_init, *k_pass,
+        *k_live, *k_hash;
     sluice_loop *loop;
     /* scratch kept between calls; streams only grow */
     sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
-    sluice_stream *map, *map_start; /* the cell-ordered copy of the photons */
-    sluice_stream *box;             /* its bounding box: lo xyz, hi xyz */
-    sluice_stream *sat;             /* summed counts: skips shells without photons */
+    sluice_stream *map, *map_start;    /* the cell-ordered copy of the photons */
+    sluice_stream *box;                /* its bounding box: lo xyz, hi xyz */
+    sluice_stream *sat;                /* summed counts: skips shells without photons */
+    sluice_stream *order_keys, *order; /* the search order: queries by cell */
+    sluice_stream *qsorted, *rsorted;  /* queries and results in that order */
     /* the current call's pass hook */
     pm_knn_pass_fn on_pass;
     void *on_pass_user;
     unsigned passes_before; /* passes of the earlier batches */
-    size_t answered;        /* results current in the batch being searched */
+    size_t answered;        /* results current: all of the call's (zeroed first) */
     char message[512];
 };
 
@@ -95,6 +103,9 @@ static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
         st = sluice_kernel_launch(knn->k_live);
     if (st == SLUICE_OK)
         st = sluice_stream_swap(knn->live, knn->next);
+    /* the hook reads the results in the queries' order */
+    if (st == SLUICE_OK && knn->on_pass)
+        st = sluice_kernel_launch_count(knn->k_unsort, knn->answered);
     if (st == SLUICE_OK && knn->on_pass)
         st = knn->on_pass(knn->on_pass_user, knn->passes_before + pass, knn->answered);
     return st;
@@ -118,6 +129,9 @@ void pm_knn_destroy(pm_knn *knn)
     sluice_kernel_destroy(knn->k_bounds);
     for (int a = 0; a < 3; ++a)
         sluice_kernel_destroy(knn->k_sat[a]);
+    sluice_kernel_destroy(knn->k_order);
+    sluice_kernel_destroy(knn->k_sortq);
+    sluice_kernel_destroy(knn->k_unsort);
     sluice_kernel_destroy(knn->k_init);
     sluice_kernel_destroy(knn->k_pass);
     sluice_kernel_destroy(knn->k_live);
@@ -132,6 +146,10 @@ void pm_knn_destroy(pm_knn *knn)
     sluice_stream_destroy(knn->map_start);
     sluice_stream_destroy(knn->box);
     sluice_stream_destroy(knn->sat);
+    sluice_stream_destroy(knn->order_keys);
+    sluice_stream_destroy(knn->order);
+    sluice_stream_destroy(knn->qsorted);
+    sluice_stream_destroy(knn->rsorted);
     free(knn);
 }
 
@@ -158,6 +176,12 @@ sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out)
     static const char *const sat_names[3] = {"pm_knn_sat_x", "pm_knn_sat_y", "pm_knn_sat_z"};
     for (int a = 0; st == SLUICE_OK && a < 3; ++a)
         st = sluice_kernel_create(knn->prog, sat_names[a], &knn->k_sat[a]);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_order_keys", &knn->k_order);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_sort_queries", &knn->k_sortq);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_unsort_results", &knn->k_unsort);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(knn->prog, "pm_knn_init", &knn->k_init);
     if (st == SLUICE_OK)
@@ -512,11 +536,56 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st != SLUICE_OK)
         goto runtime_fail;
 
+    step = "ordering the queries by cell";
+    st = ensure(knn->ctx, &knn->order_keys, 4, n);
+    if (st == SLUICE_OK)
+        st = ensure(knn->ctx, &knn->order, 4, n);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_order, 0, queries, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(knn->k_order, 1, sizeof g, &g);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_order, 2, knn->order_keys, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_order, 3, knn->order, 0);
+    if (st == SLUICE_OK && n)
+        st = sluice_kernel_launch_count(knn->k_order, n);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(knn->order_keys, n);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(knn->order, n);
+    if (st == SLUICE_OK && n)
+        st = sluice_sort_radix(knn->ctx, knn->order_keys, knn->order);
+    if (st == SLUICE_OK)
+        st = ensure(knn->ctx, &knn->qsorted, sizeof(pm_query), n);
+    if (st == SLUICE_OK)
+        st = ensure(knn->ctx, &knn->rsorted, sizeof(pm_knn_result), n);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_sortq, 0, knn->order, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_sortq, 1, queries, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_sortq, 2, knn->qsorted, 0);
+    if (st == SLUICE_OK && n)
+        st = sluice_kernel_launch_count(knn->k_sortq, n);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(knn->qsorted, n);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_unsort, 0, knn->order, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_unsort, 1, knn->rsorted, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_unsort, 2, results, 0);
+    if (st != SLUICE_OK)
+        goto runtime_fail;
+
     step = "binding the kernels";
     sluice_kernel *k = knn->k_pass;
     st = sluice_kernel_set_input(k, PASS_LIVE, knn->live);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, PASS_QUERIES, queries, 0);
+        st = sluice_kernel_set_stream(k, PASS_ORDER, knn->order, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, PASS_QUERIES, knn->qsorted, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, PASS_MAP, knn->map, 0);
     if (st == SLUICE_OK)
@@ -532,7 +601,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(k, PASS_EXACT, sizeof exact, &exact);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, PASS_RESULTS, results, 0);
+        st = sluice_kernel_set_stream(k, PASS_RESULTS, knn->rsorted, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, PASS_HEAP_D2, exact ? knn->heap_d2 : knn->dummy, 0);
     if (st == SLUICE_OK)
@@ -542,18 +611,22 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st == SLUICE_OK)
         st = sluice_kernel_set_input(knn->k_live, 0, knn->live);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(knn->k_live, 1, results, 0);
+        st = sluice_kernel_set_stream(knn->k_live, 1, knn->rsorted, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_output(knn->k_live, 2, 0, knn->next, SLUICE_UNORDERED);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(knn->k_init, 0, results, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(knn->k_init, 1, knn->live, 0);
+        st = sluice_kernel_set_stream(knn->k_init, 0, knn->live, 0);
     if (st != SLUICE_OK)
         goto runtime_fail;
 
-    /* the length first: a pass hook may read the results */
-    st = sluice_stream_set_length(results, n);
+    /* every result zeroed and the length set first: a batch takes queries
+     * from all over the input (the search order), and a pass hook may read
+     * any result */
+    step = "clearing the results";
+    const pm_knn_result zero = {0.0f, 0.0f, 0.0f, 0.0f, 0u, 0u, 0u};
+    st = n ? sluice_stream_fill(knn->rsorted, &zero, n) : SLUICE_OK;
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(results, n);
     if (st != SLUICE_OK)
         goto runtime_fail;
     knn->on_pass = o->on_pass;
@@ -561,10 +634,10 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     knn->passes_before = 0;
     for (size_t base = 0; base < n; base += batch) {
         size_t bn = n - base < batch ? n - base : batch;
-        knn->answered = base + bn;
+        knn->answered = n;
         uint32_t b32 = (uint32_t)base;
         step = "starting a batch";
-        st = sluice_kernel_set_arg(knn->k_init, 2, sizeof b32, &b32);
+        st = sluice_kernel_set_arg(knn->k_init, 1, sizeof b32, &b32);
         if (st == SLUICE_OK)
             st = sluice_kernel_launch_count(knn->k_init, bn);
         if (st == SLUICE_OK)
@@ -589,7 +662,10 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         }
     }
     knn->on_pass = NULL;
-    if (indices)
+    step = "writing the results";
+    if (n)
+        st = sluice_kernel_launch_count(knn->k_unsort, n);
+    if (st == SLUICE_OK && indices)
         st = sluice_stream_set_length(indices, n * cap);
     if (st == SLUICE_OK)
         st = sluice_context_finish(knn->ctx);

@@ -79,11 +79,12 @@ typedef enum pm_knn_mode {
 
 /**
  * Called after every pass (Purcell 6.3.4: intermediate results). Results
- * [0, answered) are current: a query still searching holds the photons found
- * so far and, in atleast mode, the radius that takes them in (exact mode
- * sums its heap only when the query is done). `pass` counts the passes of
- * the call over all batches, from 0. A non-OK return stops the search with
- * that status.
+ * [0, answered) are current (answered is the call's n: every result is
+ * zeroed before the first pass, and a batch takes its queries from all over
+ * the input): a query still searching holds the photons found so far and, in atleast mode, the
+ * radius that takes them in (exact mode sums its heap only when the query is done). `pass` counts
+ * the passes of the call over all batches, from 0. A non-OK return stops the search with that
+ * status.
  */
 typedef sluice_status (*pm_knn_pass_fn)(void *user, unsigned pass, size_t answered);
 

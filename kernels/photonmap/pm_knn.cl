@@ -8,9 +8,10 @@
  * over the live query ids, each exploring one more shell of cells (the
  * cells at Chebyshev distance `shells` from the query's cell; shells and
  * faces without photons are jumped over by the counts) and deciding whether
- * it is done, then pm_knn_live, which emits the ids still searching into the
- * next live stream. The heavy work is in a kernel without conditional
- * outputs, since an emitting body runs twice. */
+ * it is done, then pm_knn_live, which emits those still searching into the
+ * next live stream. Live streams hold places in the search order (queries
+ * sorted by cell, pm_knn_order_keys), order[place] the query. The heavy work is in a kernel without
+ * conditional outputs, since an emitting body runs twice. */
 #include "sluice.cl"
 
 /* Squared distance from x to where the photons of cell j of an axis of n
@@ -412,13 +413,45 @@ __kernel void pm_knn_sat_z(SLUICE_PARAMS, pg_params g, global uint *sat)
     }
 }
 
-/* Zeroes the results of queries base .. base+n and lists them as live. */
-__kernel void pm_knn_init(SLUICE_PARAMS, global pm_knn_result *results, global uint *live,
-                          uint base)
+/* The order the search takes the queries in: by their cells (keys, for
+ * the radix sort; a query with a coordinate that is not finite sorts
+ * last), so that queries taken one after another read the same photons
+ * from cache (in the order given, bench_knn's random queries, each reads
+ * its cells from memory). */
+__kernel void pm_knn_order_keys(SLUICE_PARAMS, global const pm_query *queries, pg_params g,
+                                global uint *keys, global uint *order)
 {
     SLUICE_FOR_EACH (i) {
-        pm_knn_result r = {0.0f, 0.0f, 0.0f, 0.0f, 0u, 0u, 0u};
-        results[base + i] = r;
+        pm_query Q = queries[i];
+        keys[i] = pg_cell(Q.px, Q.py, Q.pz, &g);
+        order[i] = i;
+    }
+}
+
+/* The queries copied in the search order, so that the passes read them
+ * (and their results, kept in the same order) one after another. */
+__kernel void pm_knn_sort_queries(SLUICE_PARAMS, global const uint *order,
+                                  global const pm_query *queries, global pm_query *sorted)
+{
+    SLUICE_FOR_EACH (j) {
+        sorted[j] = queries[order[j]];
+    }
+}
+
+/* The results back in the queries' order. */
+__kernel void pm_knn_unsort_results(SLUICE_PARAMS, global const uint *order,
+                                    global const pm_knn_result *sorted,
+                                    global pm_knn_result *results)
+{
+    SLUICE_FOR_EACH (j) {
+        results[order[j]] = sorted[j];
+    }
+}
+
+/* Lists the places base .. base+n of the search order as live. */
+__kernel void pm_knn_init(SLUICE_PARAMS, global uint *live, uint base)
+{
+    SLUICE_FOR_EACH (i) {
         live[i] = base + i;
     }
 }
@@ -458,16 +491,18 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
 }
 
 /* One shell for every live query (see the top of the file). */
-__kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const pm_query *queries,
-                          global const float *map, global const uint *map_start,
-                          global const uint *cell_count, global const uint *sat, pg_params g,
-                          pm_knn_params p, uint exact, uint base, global pm_knn_result *results,
-                          global float *heap_d2, global uint *heap_id, global uint *indices)
+__kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const uint *order,
+                          global const pm_query *queries, global const float *map,
+                          global const uint *map_start, global const uint *cell_count,
+                          global const uint *sat, pg_params g, pm_knn_params p, uint exact,
+                          uint base, global pm_knn_result *results, global float *heap_d2,
+                          global uint *heap_id, global uint *indices)
 {
     SLUICE_FOR_EACH (i) {
-        uint q = live[i];
-        pm_query Q = queries[q];
-        pm_knn_result r = results[q];
+        /* queries and results in the search order; q indexes the lists */
+        uint at = live[i], q = order[at];
+        pm_query Q = queries[at];
+        pm_knn_result r = results[at];
         pm_state st;
         st.px = Q.px;
         st.py = Q.py;
@@ -482,11 +517,11 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
         st.count = r.count;
         st.flags = r.flags;
         st.q = q;
-        st.hd = heap_d2 + (ulong)(q - base) * (exact ? p.k : 0u);
-        st.hi = heap_id + (ulong)(q - base) * (exact ? p.k : 0u);
+        st.hd = heap_d2 + (ulong)(at - base) * (exact ? p.k : 0u);
+        st.hi = heap_id + (ulong)(at - base) * (exact ? p.k : 0u);
         if (!pg_finite(Q.px) || !pg_finite(Q.py) || !pg_finite(Q.pz)) {
             r.flags |= PM_KNN_DONE | PM_KNN_BAD_QUERY;
-            results[q] = r;
+            results[at] = r;
             continue;
         }
         float qp[3] = {Q.px, Q.py, Q.pz};
@@ -593,7 +628,7 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const p
         r.sg = st.sg;
         r.sb = st.sb;
         r.r2 = st.r2;
-        results[q] = r;
+        results[at] = r;
     }
 }
 
@@ -747,12 +782,13 @@ __kernel void pm_knn_hash(SLUICE_PARAMS, global const pm_query *queries, global 
     }
 }
 
-/* The live queries that are not done, into the next live stream. */
+/* The live queries that are not done, into the next live stream (results
+ * in the search order). */
 __kernel void pm_knn_live(SLUICE_PARAMS, global const uint *live,
                           global const pm_knn_result *results, global uint *next)
 {
     SLUICE_FOR_EACH (i) {
-        uint q = live[i];
-        SLUICE_EMIT_IF(0, next, q, (results[q].flags & PM_KNN_DONE) == 0u);
+        uint at = live[i];
+        SLUICE_EMIT_IF(0, next, at, (results[at].flags & PM_KNN_DONE) == 0u);
     }
 }
