@@ -38,6 +38,89 @@ inline float3 rt_area_light_weight(const rt_surface *s, float3 wo, float3 w, flo
     return w * rt_brdf(&s->m, s->n, wi, wo) * le * (c * cl / d2 * per_sample);
 }
 
+/* Light samples taken side by side: the area-light loop of rt_shade works
+ * on this many at a time, in vectors (the work-group vectorizer cannot
+ * widen a loop whose length varies from hit to hit), and on the rest (a
+ * scene's 1 or 4, or what is left of its 32) one at a time, where a block
+ * would mostly compute lanes it throws away. */
+#define RT_LIGHT_LANES 8u
+
+/* Light samples k0 .. k0 + 7 of a hit (surface s, seen along wo, weight w;
+ * its samples keyed skey): which can add light (gos) and, when `writing`,
+ * each one's shadow ray direction, length and weight. Not inlined: in the
+ * shading kernel its vectors would weigh on the code of every hit, also of
+ * scenes that take one sample (measured). */
+__attribute__((noinline)) void
+rt_light_block8(uint k0, uint skey, const rt_surface *s, float3 o, float3 w, float3 wo,
+                float3 reach, float per_sample, uint tri, int writing, const rt_frame *f,
+                global const uint *area_tris, global const float *area_cdf, global const float *tv,
+                global const uint *tri_mat, global const rt_material *mats, int *gos,
+                float dir[3][RT_LIGHT_LANES], float *tmax, float wl[3][RT_LIGHT_LANES])
+{
+    /* pick an emissive triangle by area, then a uniform point on it;
+     * the hit's samples stratified over the lights together */
+    uint8 k = (uint8)(k0) + (uint8)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u);
+    float8 u0, u1, q[3], lc[3];
+    uint8 lt;
+    rt_sobol2_8(k, skey, &u0, &u1);
+    rt_area_light_point8(u0, u1, f->area_lights, area_tris, area_cdf, tv, q, lc, &lt);
+    uint lts[RT_LIGHT_LANES];
+    float ler[RT_LIGHT_LANES], leg[RT_LIGHT_LANES], leb[RT_LIGHT_LANES];
+    vstore8(lt, 0, lts);
+    for (uint l = 0u; l < RT_LIGHT_LANES; ++l) {
+        rt_material lm = mats[tri_mat[lts[l]]];
+        ler[l] = lm.er;
+        leg[l] = lm.eg;
+        leb[l] = lm.eb;
+    }
+    float8 le[3] = {vload8(0, ler), vload8(0, leg), vload8(0, leb)};
+    float8 L[3] = {q[0] - o.x, q[1] - o.y, q[2] - o.z};
+    /* whether a sample can add light, from signs and colours alone:
+     * the count pass (an emitting body runs twice) stops here, and
+     * only the writing pass normalizes and weighs */
+    int8 go = (lt != (uint8)(tri)) & (s->n.x * L[0] + s->n.y * L[1] + s->n.z * L[2] > 0.0f) &
+              (lc[0] * L[0] + lc[1] * L[1] + lc[2] * L[2] < 0.0f) &
+              (s->ng.x * L[0] + s->ng.y * L[1] + s->ng.z * L[2] > 0.0f) &
+              (fmax(reach.x * le[0], fmax(reach.y * le[1], reach.z * le[2])) > 0.0f);
+    vstore8(go, 0, gos);
+    if (writing) {
+        /* f cos cos_l / d^2 over the sample's pdf (the lights' area
+         * over the samples taken) */
+        float8 d2 = L[0] * L[0] + L[1] * L[1] + L[2] * L[2], dist = sqrt(d2);
+        float8 wi[3] = {L[0] / dist, L[1] / dist, L[2] / dist};
+        float8 ll = sqrt(lc[0] * lc[0] + lc[1] * lc[1] + lc[2] * lc[2]);
+        float8 c = s->n.x * wi[0] + s->n.y * wi[1] + s->n.z * wi[2];
+        float8 cl = -((lc[0] / ll) * wi[0] + (lc[1] / ll) * wi[1] + (lc[2] / ll) * wi[2]);
+        float8 scale = c * cl / d2 * per_sample;
+        /* the BRDF, the same in every direction but a glossy surface's */
+        float3 fb = rt_brdf(&s->m, s->n, s->n, wo);
+        float8 fv[3] = {(float8)(fb.x), (float8)(fb.y), (float8)(fb.z)};
+        if (s->m.kind == 3u) {
+            float fr[3][RT_LIGHT_LANES];
+            for (uint l = 0u; l < RT_LIGHT_LANES; ++l) {
+                float3 wil =
+                    (float3)(RT_LANE8_(wi[0], l), RT_LANE8_(wi[1], l), RT_LANE8_(wi[2], l));
+                float3 fl = rt_brdf(&s->m, s->n, wil, wo);
+                fr[0][l] = fl.x;
+                fr[1][l] = fl.y;
+                fr[2][l] = fl.z;
+            }
+            for (int a = 0; a < 3; ++a)
+                fv[a] = vload8(0, fr[a]);
+        }
+        float wa[3] = {w.x, w.y, w.z};
+        for (int a = 0; a < 3; ++a) {
+            vstore8(wi[a], 0, dir[a]);
+            vstore8(wa[a] * fv[a] * le[a] * scale, 0, wl[a]);
+        }
+        /* stop just short of the light's own surface: by a relative
+         * 1e-5, far above the rounding of t (1e-7) and far below any
+         * gap a scene would model (0.001 let light through walls it
+         * sat just outside of: test_stress's leak case) */
+        vstore8(dist * 0.99999f, 0, tmax);
+    }
+}
+
 /* Shades rays [base, base + count) of a wave (launched over count). */
 __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt_hit *hits,
                        uint base, global rt_ray *shadow, global rt_ray *secondary,
@@ -94,25 +177,32 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
         uint nl = (lit && f.area_lights) ? f.light_samples : 0u;
         float per_sample = f.area_total / (float)f.light_samples;
         float3 reach = w * rt_brdf_support(&s.m);
-        for (uint k = 0u; k < nl; ++k) {
-            /* pick an emissive triangle by area, then a uniform point on it;
-             * the hit's samples stratified over the lights together */
-            float2 u = rt_sobol2(k, rt_key(ray.key, 16u));
+        float3 o = s.p + off;
+        uint skey = rt_key(ray.key, 16u);
+        uint full = nl / RT_LIGHT_LANES * RT_LIGHT_LANES;
+        for (uint k0 = 0u; k0 < full; k0 += RT_LIGHT_LANES) {
+            int gos[RT_LIGHT_LANES];
+            float dir[3][RT_LIGHT_LANES], tmax[RT_LIGHT_LANES], wl[3][RT_LIGHT_LANES];
+            rt_light_block8(k0, skey, &s, o, w, wo, reach, per_sample, h.tri, SLUICE_WRITING, &f,
+                            area_tris, area_cdf, tv, tri_mat, mats, gos, dir, tmax, wl);
+            for (uint l = 0u; l < RT_LIGHT_LANES; ++l) {
+                RT_EMIT_SHADOW(gos[l], rt_spawn(s.p, off, (float3)(dir[0][l], dir[1][l], dir[2][l]),
+                                                tmax[l], (float3)(wl[0][l], wl[1][l], wl[2][l]),
+                                                ray.pixel, 0u, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
+                SLUICE_COUNT(1, gos[l] != 0);
+            }
+        }
+        for (uint k = full; k < nl; ++k) {
+            /* the same, one sample at a time */
+            float2 u = rt_sobol2(k, skey);
             float3 q, lc;
             uint lt =
                 rt_area_light_point(u.x, u.y, f.area_lights, area_tris, area_cdf, tv, &q, &lc);
             rt_material lm = mats[tri_mat[lt]];
             float3 le = (float3)(lm.er, lm.eg, lm.eb);
             float3 L = q - (s.p + off);
-            /* whether the sample can add light, from signs and colours
-             * alone: the count pass (an emitting body runs twice) stops
-             * here, and only the writing pass normalizes and weighs */
             int go = lit && lt != h.tri && dot(s.n, L) > 0.0f && dot(lc, L) < 0.0f &&
                      dot(s.ng, L) > 0.0f && rt_max3(reach * le) > 0.0f;
-            /* stop just short of the light's own surface: by a relative
-             * 1e-5, far above the rounding of t (1e-7) and far below any gap
-             * a scene would model (0.001 let light through walls it sat
-             * just outside of: test_stress's leak case) */
             RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, q, 0.99999f,
                                              rt_area_light_weight(&s, wo, w, L, lc, le, per_sample),
                                              ray.pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));

@@ -30,28 +30,31 @@ inline float rt_rand(uint key, uint dim)
     return (float)(rt_key(key, dim) >> 8) * (1.0f / 16777216.0f);
 }
 
-/* The bits of x in reverse order. */
-inline uint rt_reverse_bits(uint x)
-{
-    x = (x << 16) | (x >> 16);
-    x = ((x & 0x00ff00ffu) << 8) | ((x & 0xff00ff00u) >> 8);
-    x = ((x & 0x0f0f0f0fu) << 4) | ((x & 0xf0f0f0f0u) >> 4);
-    x = ((x & 0x33333333u) << 2) | ((x & 0xccccccccu) >> 2);
-    return ((x & 0x55555555u) << 1) | ((x & 0xaaaaaaaau) >> 1);
-}
-
-/* The hash of rt_owen on bits already reversed: returns the reversed bits
- * of the scrambled value. Each bit of the hash depends only on the bits
- * below it (an add and multiplies by even constants). */
-inline uint rt_owen_reversed_(uint r, uint seed)
-{
-    r += seed;
-    r ^= r * 0x6c50b47cu;
-    r ^= r * 0xb82f1e52u;
-    r ^= r * 0xc7afe638u;
-    r ^= r * 0x8d22f6e6u;
-    return rt_reverse_bits(r);
-}
+/* The bits of x in reverse order; the hash of rt_owen on bits already
+ * reversed (returns the reversed bits of the scrambled value: each bit of
+ * the hash depends only on the bits below it, an add and multiplies by even
+ * constants). Defined for uint and, for the shaders' light samples taken 8
+ * side by side, uint8: the same operations lane by lane. */
+#define RT_RNG_BITS_(T, reverse, owen_reversed)                                                    \
+    inline T reverse(T x)                                                                          \
+    {                                                                                              \
+        x = (x << 16) | (x >> 16);                                                                 \
+        x = ((x & 0x00ff00ffu) << 8) | ((x & 0xff00ff00u) >> 8);                                   \
+        x = ((x & 0x0f0f0f0fu) << 4) | ((x & 0xf0f0f0f0u) >> 4);                                   \
+        x = ((x & 0x33333333u) << 2) | ((x & 0xccccccccu) >> 2);                                   \
+        return ((x & 0x55555555u) << 1) | ((x & 0xaaaaaaaau) >> 1);                                \
+    }                                                                                              \
+    inline T owen_reversed(T r, uint seed)                                                         \
+    {                                                                                              \
+        r += seed;                                                                                 \
+        r ^= r * 0x6c50b47cu;                                                                      \
+        r ^= r * 0xb82f1e52u;                                                                      \
+        r ^= r * 0xc7afe638u;                                                                      \
+        r ^= r * 0x8d22f6e6u;                                                                      \
+        return reverse(r);                                                                         \
+    }
+RT_RNG_BITS_(uint, rt_reverse_bits, rt_owen_reversed_)
+RT_RNG_BITS_(uint8, rt_reverse_bits8, rt_owen_reversed8_)
 
 /* A nested uniform (Owen) scramble of x read as a binary fraction, keyed by
  * `seed`: each bit is flipped or not by a hash of the bits above it, so an
@@ -65,6 +68,21 @@ inline uint rt_owen(uint x, uint seed)
     return rt_owen_reversed_(rt_reverse_bits(x), seed);
 }
 
+/* The second dimension's bit 31 - j is the XOR of the bits i of k with C(i,
+ * j) odd, that is (Lucas) with j's bits a subset of i's: a sum over
+ * supersets, five shift-and-mask rounds on the reversed bits instead of a
+ * loop over k's. Both coordinates stay reversed into the scramble, which
+ * reverses them first. Integers (uint or uint8) x and y from k and seed. */
+#define RT_SOBOL2_BITS_(T, owen_reversed, k, seed, x, y)                                           \
+    T z = (k);                                                                                     \
+    z ^= (z >> 1) & 0x55555555u;                                                                   \
+    z ^= (z >> 2) & 0x33333333u;                                                                   \
+    z ^= (z >> 4) & 0x0f0f0f0fu;                                                                   \
+    z ^= (z >> 8) & 0x00ff00ffu;                                                                   \
+    z ^= (z >> 16) & 0x0000ffffu;                                                                  \
+    T x = owen_reversed((k), rt_hash((seed) ^ 0x2545f491u));                                       \
+    T y = owen_reversed(z, rt_hash((seed) ^ 0x9e3779b9u))
+
 /* Point k of an Owen-scrambled Sobol (0,2)-sequence keyed by `seed`, in
  * [0,1)^2: the first two dimensions of Sobol's sequence (van der Corput's
  * bits of k reversed; then the matrix of Pascal's triangle mod 2), each
@@ -76,20 +94,17 @@ inline uint rt_owen(uint x, uint seed)
  * different strata. */
 inline float2 rt_sobol2(uint k, uint seed)
 {
-    /* The second dimension's bit 31 - j is the XOR of the bits i of k with
-     * C(i, j) odd, that is (Lucas) with j's bits a subset of i's: a sum over
-     * supersets, five shift-and-mask rounds on the reversed bits instead of
-     * a loop over k's. Both coordinates stay reversed into the scramble,
-     * which reverses them first. */
-    uint z = k;
-    z ^= (z >> 1) & 0x55555555u;
-    z ^= (z >> 2) & 0x33333333u;
-    z ^= (z >> 4) & 0x0f0f0f0fu;
-    z ^= (z >> 8) & 0x00ff00ffu;
-    z ^= (z >> 16) & 0x0000ffffu;
-    uint x = rt_owen_reversed_(k, rt_hash(seed ^ 0x2545f491u));
-    uint y = rt_owen_reversed_(z, rt_hash(seed ^ 0x9e3779b9u));
+    RT_SOBOL2_BITS_(uint, rt_owen_reversed_, k, seed, x, y);
     return (float2)((float)(x >> 8), (float)(y >> 8)) * (1.0f / 16777216.0f);
+}
+
+/* rt_sobol2 for the 8 points k (lane by lane the same numbers): the first
+ * coordinates in *u0, the second in *u1. */
+inline void rt_sobol2_8(uint8 k, uint seed, float8 *u0, float8 *u1)
+{
+    RT_SOBOL2_BITS_(uint8, rt_owen_reversed8_, k, seed, x, y);
+    *u0 = convert_float8(x >> 8) * (1.0f / 16777216.0f);
+    *u1 = convert_float8(y >> 8) * (1.0f / 16777216.0f);
 }
 
 #endif
