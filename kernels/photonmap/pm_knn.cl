@@ -462,7 +462,8 @@ __kernel void pm_knn_init(SLUICE_PARAMS, global uint *live, uint base)
 static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const int *n,
                                const pg_params *g, const pm_knn_params *p, uint exact,
                                global const float *map, global const uint *map_start,
-                               global const uint *cell_count, global uint *indices)
+                               global const uint *cell_count, global uint *indices,
+                               const int *hole_c, int hole)
 {
     for (int z = b0[2]; z <= b1[2]; ++z) {
         float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2], p->box_lo[2],
@@ -481,11 +482,26 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
                 continue;
             int xa = b0[0], xb = b1[0];
             pm_trim(st->px, t, g->lo[0], g->inv_cell[0], g->dims[0], p->margin[0], &xa, &xb);
-            if (xa > xb)
-                continue;
-            pm_scan_run(st, map_start[row + (uint)xa],
-                        map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, exact, map,
-                        indices);
+            /* a row through the hole (the cells already explored, a cube
+             * of half-side `hole` about hole_c; none when hole < 0) is
+             * scanned on either side of it */
+            int ha = xb + 1, hb = xb;
+            if (hole >= 0 && abs(y - hole_c[1]) <= hole && abs(z - hole_c[2]) <= hole) {
+                ha = max(xa, hole_c[0] - hole);
+                hb = min(xb, hole_c[0] + hole);
+            }
+            if (ha > hb) { /* the hole misses the row's cells */
+                ha = xb + 1;
+                hb = xb;
+            }
+            if (xa < ha)
+                pm_scan_run(st, map_start[row + (uint)xa],
+                            map_start[row + (uint)(ha - 1)] + cell_count[row + (uint)(ha - 1)], p,
+                            exact, map, indices);
+            if (hb + 1 <= xb)
+                pm_scan_run(st, map_start[row + (uint)(hb + 1)],
+                            map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, exact, map,
+                            indices);
         }
     }
 }
@@ -539,6 +555,32 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                 ++s;
             full = exact ? st.count == p.k : st.count >= p.k;
             reach = exact ? (st.count ? st.hd[0] : 0.0f) : st.r2;
+            if (full) {
+                /* Holding k photons, the search is a radius search: in
+                 * at-least mode the radius is frozen, so the order in which
+                 * the rest is found changes nothing; exact mode's only
+                 * shrinks. Every cell within the radius outside the shells
+                 * explored (0 .. s - 1) is swept in one step, row by row,
+                 * instead of one shell after another, whose faces across x
+                 * are rows of one cell each: the same photons. */
+                int b0[3], b1[3], ext = 0;
+                covered = 1;
+                for (int a = 0; a < 3; ++a) {
+                    b0[a] = 0;
+                    b1[a] = n[a] - 1;
+                    pm_trim(qp[a], reach, g.lo[a], g.inv_cell[a], g.dims[a], p.margin[a], &b0[a],
+                            &b1[a]);
+                    covered &= b0[a] == 0 && b1[a] == n[a] - 1;
+                    ext = max(ext, max(qc[a] - b0[a], b1[a] - qc[a]));
+                }
+                if (b0[0] <= b1[0] && b0[1] <= b1[1] && b0[2] <= b1[2])
+                    pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices,
+                                qc, s - 1);
+                s = max(s, ext);
+                reach = exact ? st.hd[0] : st.r2;
+                done = 1;
+                break;
+            }
             /* Shells without photons change nothing: the search jumps to the
              * first shell u >= s that holds photons or at which it would have
              * ended, by the summed counts (Purcell explores every shell, one a
@@ -587,7 +629,8 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                     if (b0[0] > b1[0] || b0[1] > b1[1] || b0[2] > b1[2] ||
                         pm_box(sat, n, b0[0], b1[0], b0[1], b1[1], b0[2], b1[2]) == 0u)
                         continue;
-                    pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices);
+                    pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices,
+                                qc, -1);
                 }
             }
             float ds2 = pm_cube_d2(qp, qc, s, n, &g, &p, &covered);
