@@ -45,17 +45,26 @@ inline float3 rt_area_light_weight(const rt_surface *s, float3 wo, float3 w, flo
  * would mostly compute lanes it throws away. */
 #define RT_LIGHT_LANES 8u
 
+/* A function the compiler keeps apart (Clang's attribute; elsewhere a
+ * hint left out, the same code inlined). */
+#if defined(__clang__)
+#define RT_NOINLINE __attribute__((noinline))
+#else
+#define RT_NOINLINE
+#endif
+
 /* Light samples k0 .. k0 + 7 of a hit (surface s, seen along wo, weight w;
  * its samples keyed skey): which can add light (gos) and, when `writing`,
  * each one's shadow ray direction, length and weight. Not inlined: in the
  * shading kernel its vectors would weigh on the code of every hit, also of
  * scenes that take one sample (measured). */
-__attribute__((noinline)) void
-rt_light_block8(uint k0, uint skey, const rt_surface *s, float3 o, float3 w, float3 wo,
-                float3 reach, float per_sample, uint tri, int writing, const rt_frame *f,
-                global const uint *area_tris, global const float *area_cdf, global const float *tv,
-                global const uint *tri_mat, global const rt_material *mats, int *gos,
-                float dir[3][RT_LIGHT_LANES], float *tmax, float wl[3][RT_LIGHT_LANES])
+RT_NOINLINE void rt_light_block8(uint k0, uint skey, const rt_surface *s, float3 o, float3 w,
+                                 float3 wo, float3 reach, float per_sample, uint tri, int writing,
+                                 const rt_frame *f, global const uint *area_tris,
+                                 global const float *area_cdf, global const float *tv,
+                                 global const uint *tri_mat, global const rt_material *mats,
+                                 int *gos, float dir[3][RT_LIGHT_LANES], float *tmax,
+                                 float wl[3][RT_LIGHT_LANES])
 {
     /* pick an emissive triangle by area, then a uniform point on it;
      * the hit's samples stratified over the lights together */
