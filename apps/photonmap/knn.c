@@ -560,22 +560,16 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         st = ensure(knn->ctx, &knn->qsorted, sizeof(pm_query), n);
     if (st == SLUICE_OK)
         st = ensure(knn->ctx, &knn->rsorted, sizeof(pm_knn_result), n);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(knn->k_sortq, 0, knn->order, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(knn->k_sortq, 1, queries, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(knn->k_sortq, 2, knn->qsorted, 0);
+    sluice_stream *sortq_args[] = {knn->order, queries, knn->qsorted};
+    sluice_stream *unsort_args[] = {knn->order, knn->rsorted, results};
+    for (unsigned i = 0; st == SLUICE_OK && i < 3; ++i)
+        st = sluice_kernel_set_stream(knn->k_sortq, i, sortq_args[i], 0);
+    for (unsigned i = 0; st == SLUICE_OK && i < 3; ++i)
+        st = sluice_kernel_set_stream(knn->k_unsort, i, unsort_args[i], 0);
     if (st == SLUICE_OK && n)
         st = sluice_kernel_launch_count(knn->k_sortq, n);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(knn->qsorted, n);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(knn->k_unsort, 0, knn->order, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(knn->k_unsort, 1, knn->rsorted, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(knn->k_unsort, 2, results, 0);
     if (st != SLUICE_OK)
         goto runtime_fail;
 
@@ -632,9 +626,9 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     knn->on_pass = o->on_pass;
     knn->on_pass_user = o->on_pass_user;
     knn->passes_before = 0;
+    knn->answered = n;
     for (size_t base = 0; base < n; base += batch) {
         size_t bn = n - base < batch ? n - base : batch;
-        knn->answered = n;
         uint32_t b32 = (uint32_t)base;
         step = "starting a batch";
         st = sluice_kernel_set_arg(knn->k_init, 1, sizeof b32, &b32);

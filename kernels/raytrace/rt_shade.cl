@@ -209,7 +209,7 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
                 rt_area_light_point(u.x, u.y, f.area_lights, area_tris, area_cdf, tv, &q, &lc);
             rt_material lm = mats[tri_mat[lt]];
             float3 le = (float3)(lm.er, lm.eg, lm.eb);
-            float3 L = q - (s.p + off);
+            float3 L = q - o;
             int go = lit && lt != h.tri && dot(s.n, L) > 0.0f && dot(lc, L) < 0.0f &&
                      dot(s.ng, L) > 0.0f && rt_max3(reach * le) > 0.0f;
             RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, q, 0.99999f,

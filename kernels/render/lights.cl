@@ -38,14 +38,12 @@ inline uint rt_area_light_point(float u0, float u1, uint count, global const uin
     return lt;
 }
 
-/* Lane l of an 8-wide vector, and 8 reads of p at the lanes of i. */
+/* Lane l of an 8-wide vector, and the 8 reads of p at the lanes of i as a
+ * vector of type T. */
 #define RT_LANE8_(v, l) (((const float *)&(v))[l])
-#define RT_GATHER8_(p, i)                                                                          \
-    (float8)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5],         \
-             (p)[(i).s6], (p)[(i).s7])
-#define RT_GATHER8U_(p, i)                                                                         \
-    (uint8)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5],          \
-            (p)[(i).s6], (p)[(i).s7])
+#define RT_GATHER8_(T, p, i)                                                                       \
+    (T)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5], (p)[(i).s6], \
+        (p)[(i).s7])
 
 /* rt_area_light_point for 8 samples side by side (the shaders' light
  * samples): lane l picks with (u0, u1) lane l and gets the same triangle,
@@ -56,26 +54,26 @@ inline void rt_area_light_point8(float8 u0, float8 u1, uint count, global const 
                                  float8 *lc, uint8 *lt)
 {
     uint8 lo = (uint8)(0u), hi = (uint8)(count - 1u);
-    for (int8 more = convert_int8(lo < hi); any(more); more = convert_int8(lo < hi)) {
+    for (int8 more = lo < hi; any(more); more = lo < hi) {
         uint8 mid = (lo + hi) / 2u;
-        int8 ge = RT_GATHER8_(area_cdf, mid) >= u0;
+        int8 ge = RT_GATHER8_(float8, area_cdf, mid) >= u0;
         hi = select(hi, mid, more & ge);
         lo = select(lo, mid + 1u, more & ~ge);
     }
     uint8 before = select(lo - 1u, (uint8)(0u), lo == 0u);
-    float8 below = select(RT_GATHER8_(area_cdf, before), (float8)(0.0f), lo == 0u);
-    float8 width = RT_GATHER8_(area_cdf, lo) - below;
+    float8 below = select(RT_GATHER8_(float8, area_cdf, before), (float8)(0.0f), lo == 0u);
+    float8 width = RT_GATHER8_(float8, area_cdf, lo) - below;
     float8 ur = select((float8)(0.5f), clamp((u0 - below) / width, 0.0f, 1.0f), width > 0.0f);
-    uint8 t = RT_GATHER8U_(area_tris, lo), at = t * 9u;
+    uint8 t = RT_GATHER8_(uint8, area_tris, lo), at = t * 9u;
     float8 v[9];
     for (uint j = 0; j < 9u; ++j)
-        v[j] = RT_GATHER8_(tv + j, at);
-    for (int a = 0; a < 3; ++a) {
+        v[j] = RT_GATHER8_(float8, tv + j, at);
 #ifdef RT_WATERTIGHT
+    for (int a = 0; a < 3; ++a) {
         v[3 + a] -= v[a];
         v[6 + a] -= v[a];
-#endif
     }
+#endif
     float8 su = sqrt(ur);
     float8 s1 = su * (1.0f - u1), s2 = su * u1;
     for (int a = 0; a < 3; ++a)
