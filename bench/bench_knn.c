@@ -23,6 +23,7 @@
  * times the mean k-photon radius; default 1), to measure the grid choice.
  */
 #include "bench_args.h"
+#include "bench_knn_scene.h"
 #include "bench_machine.h"
 #include "knn.h"
 
@@ -40,67 +41,6 @@ static double now(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static uint32_t rnd(uint32_t *s)
-{
-    uint32_t x = *s;
-    x ^= x << 13;
-    x ^= x >> 17;
-    x ^= x << 5;
-    return *s = x;
-}
-
-static float frand(uint32_t *s)
-{
-    return (float)(rnd(s) >> 8) * (1.0f / 16777216.0f);
-}
-
-/* A quad: corner o, edges u and v. */
-typedef struct quad {
-    float o[3], u[3], v[3];
-} quad;
-
-/* The Cornell-box-like surfaces: floor, ceiling, back, left and right walls
- * of [0,1]^3, and the four visible sides and tops of two boxes. */
-static size_t scene_quads(quad *q)
-{
-    size_t n = 0;
-    q[n++] = (quad){{0, 0, 0}, {1, 0, 0}, {0, 0, 1}};
-    q[n++] = (quad){{0, 1, 0}, {1, 0, 0}, {0, 0, 1}};
-    q[n++] = (quad){{0, 0, 1}, {1, 0, 0}, {0, 1, 0}};
-    q[n++] = (quad){{0, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    q[n++] = (quad){{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    /* short box 0.15..0.45 x 0..0.3 x 0.2..0.5, tall box 0.55..0.85 x 0..0.6 x 0.5..0.8 */
-    const float b[2][6] = {{0.15f, 0.45f, 0.3f, 0.2f, 0.5f, 0},
-                           {0.55f, 0.85f, 0.6f, 0.5f, 0.8f, 0}};
-    for (int i = 0; i < 2; ++i) {
-        float x0 = b[i][0], x1 = b[i][1], h = b[i][2], z0 = b[i][3], z1 = b[i][4];
-        q[n++] = (quad){{x0, h, z0}, {x1 - x0, 0, 0}, {0, 0, z1 - z0}};
-        q[n++] = (quad){{x0, 0, z0}, {x1 - x0, 0, 0}, {0, h, 0}};
-        q[n++] = (quad){{x0, 0, z0}, {0, h, 0}, {0, 0, z1 - z0}};
-        q[n++] = (quad){{x1, 0, z0}, {0, h, 0}, {0, 0, z1 - z0}};
-    }
-    return n;
-}
-
-static double quad_area(const quad *q)
-{
-    double c[3] = {q->u[1] * q->v[2] - q->u[2] * q->v[1], q->u[2] * q->v[0] - q->u[0] * q->v[2],
-                   q->u[0] * q->v[1] - q->u[1] * q->v[0]};
-    return sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-}
-
-/* A point on the surfaces, uniform by area. */
-static void surface_point(const quad *q, const double *cdf, size_t nq, uint32_t *s, float p[3])
-{
-    double u = frand(s) * cdf[nq - 1];
-    size_t i = 0;
-    while (i + 1 < nq && cdf[i] < u)
-        ++i;
-    float a = frand(s), b = frand(s);
-    for (int k = 0; k < 3; ++k)
-        p[k] = q[i].o[k] + a * q[i].u[k] + b * q[i].v[k];
 }
 
 typedef struct result {
@@ -270,13 +210,6 @@ int main(int argc, char **argv)
             return 2;
         }
 
-    /* photons: 80% uniform on the surfaces, 20% in a spot on the floor */
-    quad q[16];
-    size_t nquads = scene_quads(q);
-    double cdf[16], area = 0.0;
-    for (size_t i = 0; i < nquads; ++i)
-        cdf[i] = area += quad_area(&q[i]);
-    uint32_t seed = 1;
     pm_photon *ph = calloc(np, sizeof *ph);
     float *pos = malloc((size_t)np * 3 * sizeof *pos);
     pm_query *qs = calloc(nq, sizeof *qs);
@@ -284,27 +217,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "bench_knn: out of memory\n");
         return 1;
     }
-    for (unsigned i = 0; i < np; ++i) {
-        float p[3];
-        if (i % 5 == 0) {
-            float a = 6.2831853f * frand(&seed), rr = 0.08f * sqrtf(frand(&seed));
-            p[0] = 0.7f + rr * cosf(a), p[1] = 0.0f, p[2] = 0.3f + rr * sinf(a);
-        } else {
-            surface_point(q, cdf, nquads, &seed, p);
-        }
-        ph[i].px = pos[3 * i] = p[0];
-        ph[i].py = pos[3 * i + 1] = p[1];
-        ph[i].pz = pos[3 * i + 2] = p[2];
-        ph[i].pr = ph[i].pg = ph[i].pb = 1.0f / (float)np;
-        ph[i].dy = -1.0f;
-    }
-    for (unsigned i = 0; i < nq; ++i) {
-        float p[3];
-        surface_point(q, cdf, nquads, &seed, p);
-        qs[i].px = p[0], qs[i].py = p[1], qs[i].pz = p[2];
-        qs[i].ny = 1.0f;
-        qs[i].id = i;
-    }
+    double area = bench_knn_scene(ph, pos, np, qs, nq);
 
     char err[512];
     sluice_context *ctx = NULL;

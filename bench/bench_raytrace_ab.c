@@ -21,6 +21,7 @@
  * Exit status 0 when both traced every ray to the same hit record (1 when
  * some differ, unless --allow-diff), 2 on bad arguments or setup errors.
  */
+#include "bench_ab.h"
 #include "bench_args.h"
 #include "bench_machine.h"
 #include "bench_rays.h"
@@ -66,12 +67,6 @@ typedef struct variant {
     double *seconds; /* per timed frame */
 } variant;
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 static void variant_free(variant *v)
 {
     sluice_stream_destroy(v->rays);
@@ -85,14 +80,9 @@ static void variant_free(variant *v)
 static int variant_create(variant *v, char name, const sr_scene *sc, rt_exec exec,
                           const rt_ray *rays, size_t n, unsigned pairs)
 {
-    char err[512];
-    sluice_context_options co;
-    memset(&co, 0, sizeof co);
-    co.build_options = v->options;
-    if (sluice_context_create(&co, &v->ctx, err, sizeof err) != SLUICE_OK) {
-        fprintf(stderr, PROG ": variant %c: %s\n", name, err);
+    if (!bench_ab_context(PROG, name, v->options, &v->ctx))
         return 0;
-    }
+    char err[512];
     rt_tracer_options o = rt_tracer_options_default();
     o.exec = exec;
     if (v->steps)
@@ -237,22 +227,15 @@ int main(int argc, char **argv)
         if (f >= 0 && (f + 1) % 32 == 0)
             fprintf(stderr, PROG ": %d of %u pairs\n", f + 1, pairs);
     }
-    double *ratio = malloc(pairs * sizeof *ratio);
-    if (!ratio) {
+    double q[3];
+    if (!bench_ab_ratio(v[0].seconds, v[1].seconds, pairs, q)) {
         fprintf(stderr, PROG ": out of memory\n");
         goto done;
     }
-    for (unsigned f = 0; f < pairs; ++f)
-        ratio[f] = v[0].seconds[f] / v[1].seconds[f];
-    qsort(ratio, pairs, sizeof *ratio, cmp_double);
-    for (int k = 0; k < 2; ++k) {
-        qsort(v[k].seconds, pairs, sizeof(double), cmp_double);
+    for (int k = 0; k < 2; ++k)
         printf("%c: best %.2f, median %.2f M rays/s\n", "AB"[k], (double)n / v[k].seconds[0] / 1e6,
                (double)n / v[k].seconds[pairs / 2] / 1e6);
-    }
-    printf("B over A, median over frame pairs: %.3f (quartiles %.3f, %.3f)\n", ratio[pairs / 2],
-           ratio[pairs / 4], ratio[(3 * pairs) / 4]);
-    free(ratio);
+    printf("B over A, median over frame pairs: %.3f (quartiles %.3f, %.3f)\n", q[1], q[0], q[2]);
     long diff = count_diff(v, n);
     if (diff < 0) {
         fprintf(stderr, PROG ": reading the hits: %s\n", sluice_context_error(v[0].ctx));

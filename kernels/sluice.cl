@@ -953,6 +953,22 @@ inline ushort sluice_mask16_(const int16 *c)
 #endif
 }
 
+/* The mask of the non-zero lanes of `c` (an int8; bit k for lane k). */
+#define sluice_mask8(c) sluice_mask8_((private int8[1]){(c)})
+
+inline uchar sluice_mask8_(const int8 *c)
+{
+#if defined(SLUICE_AVX512_) || defined(SLUICE_AVX2_)
+    /* a non-zero lane becomes -1 (sign bit set); vmovmskps gathers 8 signs */
+    return (uchar)__builtin_ia32_movmskps256(as_float8(*c != (int8)0));
+#else
+    int8 b = (*c != (int8)0) & (int8)(0x1, 0x2, 0x4, 0x8, 0x10, 0x20, 0x40, 0x80);
+    int4 h4 = b.lo | b.hi;
+    int2 h2 = h4.lo | h4.hi;
+    return (uchar)(h2.x | h2.y);
+#endif
+}
+
 /* Writes the lanes of *x selected by m to buf[p], buf[p + 1], ..., those at
  * or past lim dropped (an overflowing output). The copy keeps the
  * lane-by-lane reads off the caller's vector. */

@@ -43,14 +43,18 @@ static inline float pm_box_d2(const float *qp, const pm_knn_params *p)
 }
 
 /* Narrows the cells [*a, *b] of an axis to those whose slab may lie within
- * sqrt(t) of x: by the cell function, widened by a cell each way so that its
- * rounding never drops a cell that pm_gap2 would keep. */
-static inline void pm_trim(float x, float t, float lo, float inv_cell, uint n, float margin, int *a,
-                           int *b)
+ * sqrt(t) of x, by the cell function (monotonic in x), where t is what a
+ * bound on the squared distance leaves along this axis. The reach takes in
+ * the rounding: t and a photon's squared distance are sums of three rounded
+ * terms, each within a few ulps of the bound, and the margin covers the
+ * cell function's own rounding. (Widening by a whole cell each way instead
+ * examined 14% more photons on Purcell's cornell.) */
+static inline void pm_trim(float x, float t, float bound, float lo, float inv_cell, uint n,
+                           float margin, int *a, int *b)
 {
-    float reach = sqrt(t) + margin;
-    *a = max(*a, (int)pg_axis(x - reach, lo, inv_cell, n) - 1);
-    *b = min(*b, (int)pg_axis(x + reach, lo, inv_cell, n) + 1);
+    float reach = sqrt(fmax(t, 0.0f) + bound * 0x1p-18f) + margin;
+    *a = max(*a, (int)pg_axis(x - reach, lo, inv_cell, n));
+    *b = min(*b, (int)pg_axis(x + reach, lo, inv_cell, n));
 }
 
 /* The summed count at cell (x, y, z): the photons of the cells [0, x] x
@@ -170,13 +174,6 @@ static inline float pm_hsum8(float8 v)
     return b.x + b.y;
 }
 
-static inline int pm_hsum8i(int8 v)
-{
-    int4 a = v.lo + v.hi;
-    int2 b = a.lo + a.hi;
-    return b.x + b.y;
-}
-
 static inline float pm_hmax8(float8 v)
 {
     float4 a = fmax(v.lo, v.hi);
@@ -213,7 +210,7 @@ static inline void pm_take8(pm_state *st, const pm_knn_params *p, global const f
     *ar += select((float8)(0.0f), vload8(0, map + PM_MAP_R * stride + j), m);
     *ag += select((float8)(0.0f), vload8(0, map + PM_MAP_G * stride + j), m);
     *ab += select((float8)(0.0f), vload8(0, map + PM_MAP_B * stride + j), m);
-    st->count += (uint)(-pm_hsum8i(m));
+    st->count += (uint)popcount((uint)sluice_mask8(m));
 }
 
 /* Runs shorter than this are examined one photon at a time: a block's setup
@@ -286,7 +283,7 @@ static inline void pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params
             m &= d2 <= (float8)(st->r2);
         if (exact && st->count == p->k)
             m &= d2 < (float8)(st->hd[0]);
-        if (!any(m))
+        if (!sluice_mask8(m))
             continue;
         if (exact) {
             /* Jensen's heap, one photon at a time, in order */
@@ -302,7 +299,7 @@ static inline void pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params
         if (st->count < p->k) {
             /* each of the first k photons grows the radius: all of the
              * block's when they come before the k-th, else one at a time */
-            if (st->count + (uint)(-pm_hsum8i(m)) <= p->k) {
+            if (st->count + (uint)popcount((uint)sluice_mask8(m)) <= p->k) {
                 st->r2 = fmax(st->r2, pm_hmax8(select((float8)(0.0f), d2, m)));
             } else {
                 float dd[PM_MAP_BLOCK];
@@ -481,7 +478,8 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
             if (t < st->gx)
                 continue;
             int xa = b0[0], xb = b1[0];
-            pm_trim(st->px, t, g->lo[0], g->inv_cell[0], g->dims[0], p->margin[0], &xa, &xb);
+            pm_trim(st->px, t, pm_bound(st, p, exact), g->lo[0], g->inv_cell[0], g->dims[0],
+                    p->margin[0], &xa, &xb);
             /* a row through the hole (the cells already explored, a cube
              * of half-side `hole` about hole_c; none when hole < 0) is
              * scanned on either side of it */
@@ -568,8 +566,8 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                 for (int a = 0; a < 3; ++a) {
                     b0[a] = 0;
                     b1[a] = n[a] - 1;
-                    pm_trim(qp[a], reach, g.lo[a], g.inv_cell[a], g.dims[a], p.margin[a], &b0[a],
-                            &b1[a]);
+                    pm_trim(qp[a], reach, reach, g.lo[a], g.inv_cell[a], g.dims[a], p.margin[a],
+                            &b0[a], &b1[a]);
                     covered &= b0[a] == 0 && b1[a] == n[a] - 1;
                     ext = max(ext, max(qc[a] - b0[a], b1[a] - qc[a]));
                 }
@@ -580,6 +578,42 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                 reach = exact ? st.hd[0] : st.r2;
                 done = 1;
                 break;
+            }
+            {
+                /* Shells that cannot bring the estimate to k photons (by the
+                 * summed counts, which include photons the radius or the
+                 * normals will reject) take every photon they hold that
+                 * passes: their order changes nothing, so shells s .. u
+                 * are swept as one box of whole rows, the cube of u less the
+                 * cube explored. u stops where the shells would have
+                 * stopped: at d_u >= the maximum radius, or covering the
+                 * grid. */
+                uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n) : 0u;
+                int u = s - 1;
+                for (;;) {
+                    if (st.count + (pm_cube_count(sat, qc, u + 1, n) - before) >= p.k)
+                        break;
+                    ++u;
+                    int cov;
+                    float du = pm_cube_d2(qp, qc, u, n, &g, &p, &cov);
+                    if (cov || du >= p.max_r2)
+                        break;
+                }
+                if (u > s) {
+                    int b0[3], b1[3];
+                    for (int a = 0; a < 3; ++a) {
+                        b0[a] = max(qc[a] - u, 0);
+                        b1[a] = min(qc[a] + u, n[a] - 1);
+                    }
+                    pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices,
+                                qc, s - 1);
+                    s = u;
+                    float ds2 = pm_cube_d2(qp, qc, s, n, &g, &p, &covered);
+                    full = exact ? st.count == p.k : st.count >= p.k;
+                    reach = exact ? (st.count ? st.hd[0] : 0.0f) : st.r2;
+                    done = covered || ds2 >= p.max_r2 || (full && ds2 >= reach);
+                    continue;
+                }
             }
             /* Shells without photons change nothing: the search jumps to the
              * first shell u >= s that holds photons or at which it would have
