@@ -453,53 +453,132 @@ __kernel void pm_knn_init(SLUICE_PARAMS, global uint *live, uint base)
     }
 }
 
+/* pg_axis in 8 lanes. */
+static inline int8 pm_axis8(float8 x, float lo, float inv_cell, uint n)
+{
+    float8 f = (x - lo) * inv_cell;
+    int8 c = select((int8)((int)n - 1), convert_int8(f), f < (float8)((float)(n - 1u)));
+    return select((int8)0, c, f > (float8)0.0f);
+}
+
+/* pm_gap2 of cells j (8 lanes) of an axis. */
+static inline float8 pm_gap2_8(float x, int8 j, int n, float lo, float cell, float margin,
+                               float blo, float bhi)
+{
+    float8 l = select((float8)blo, fmax(lo + convert_float8(j) * cell, blo), j > 0);
+    float8 h = select((float8)bhi, fmin(lo + convert_float8(j + 1) * cell, bhi), j < n - 1);
+    float8 gap = select(select((float8)0.0f, x - h, (float8)x > h), l - x, (float8)x < l);
+    gap -= margin;
+    return select((float8)0.0f, gap * gap, gap > 0.0f);
+}
+
+/* Scans the cells [xa, xb] of row `row` (y, z): one run of photons, or two on
+ * either side of the hole (the cells already explored, a cube of half-side
+ * `hole` about hole_c; none when hole < 0). */
+static inline void pm_scan_row(pm_state *st, uint row, int y, int z, int xa, int xb,
+                               const pm_knn_params *p, uint exact, global const float *map,
+                               global const uint *map_start, global const uint *cell_count,
+                               global uint *indices, const int *hole_c, int hole)
+{
+    int ha = xb + 1, hb = xb;
+    if (hole >= 0 && abs(y - hole_c[1]) <= hole && abs(z - hole_c[2]) <= hole) {
+        ha = max(xa, hole_c[0] - hole);
+        hb = min(xb, hole_c[0] + hole);
+    }
+    if (ha > hb) { /* the hole misses the row's cells */
+        ha = xb + 1;
+        hb = xb;
+    }
+    if (xa < ha)
+        pm_scan_run(st, map_start[row + (uint)xa],
+                    map_start[row + (uint)(ha - 1)] + cell_count[row + (uint)(ha - 1)], p, exact,
+                    map, indices);
+    if (hb + 1 <= xb)
+        pm_scan_run(st, map_start[row + (uint)(hb + 1)],
+                    map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, exact, map, indices);
+}
+
+/* Boxes at least this many rows high (along y) take their rows 8 at a time
+ * in pm_scan_box; lower ones (the faces of a shell across y, Purcell's
+ * planar 250x1x250 grids) one at a time, where the 8-row block's setup cost
+ * more than it saved (measured, bench/README.md). */
+#ifndef PM_ROWS8_MIN
+#define PM_ROWS8_MIN 4
+#endif
+
 /* Scans the cells [b0, b1] (inclusive, within the grid) row by row along x:
  * a row's cells are one run of photons, trimmed to the cells within reach of
- * the bound; an empty row costs two reads. */
+ * the bound; an empty row costs two reads. In boxes of PM_ROWS8_MIN rows and
+ * more, rows go 8 at a time: which are empty, their gaps and trims (a
+ * square root each) side by side, then the rows left one after another, in
+ * order. The bound can only shrink while the 8 rows are scanned: trims made
+ * with it at their start reach at least as far as the bound of the moment
+ * needs, and the photons beyond are rejected one by one, so the estimate is
+ * the row-at-a-time scan's. */
 static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const int *n,
                                const pg_params *g, const pm_knn_params *p, uint exact,
                                global const float *map, global const uint *map_start,
                                global const uint *cell_count, global uint *indices,
                                const int *hole_c, int hole)
 {
+    const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
     for (int z = b0[2]; z <= b1[2]; ++z) {
         float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2], p->box_lo[2],
                            p->box_hi[2]);
         if (gz > pm_bound(st, p, exact))
             continue;
-        for (int y = b0[1]; y <= b1[1]; ++y) {
-            uint row = (uint)n[0] * ((uint)y + (uint)n[1] * (uint)z);
-            uint last = row + (uint)b1[0];
-            if (map_start[row + (uint)b0[0]] == map_start[last] + cell_count[last])
-                continue;
-            float t = pm_bound(st, p, exact) - gz -
-                      pm_gap2(st->py, y, n[1], g->lo[1], g->cell[1], p->margin[1], p->box_lo[1],
-                              p->box_hi[1]);
-            if (t < st->gx)
-                continue;
-            int xa = b0[0], xb = b1[0];
-            pm_trim(st->px, t, pm_bound(st, p, exact), g->lo[0], g->inv_cell[0], g->dims[0],
-                    p->margin[0], &xa, &xb);
-            /* a row through the hole (the cells already explored, a cube
-             * of half-side `hole` about hole_c; none when hole < 0) is
-             * scanned on either side of it */
-            int ha = xb + 1, hb = xb;
-            if (hole >= 0 && abs(y - hole_c[1]) <= hole && abs(z - hole_c[2]) <= hole) {
-                ha = max(xa, hole_c[0] - hole);
-                hb = min(xb, hole_c[0] + hole);
+        uint plane = (uint)n[0] * (uint)n[1] * (uint)z;
+        if (b1[1] - b0[1] + 1 < PM_ROWS8_MIN) {
+            for (int y = b0[1]; y <= b1[1]; ++y) {
+                uint row = plane + (uint)n[0] * (uint)y, last = row + (uint)b1[0];
+                if (map_start[row + (uint)b0[0]] == map_start[last] + cell_count[last])
+                    continue;
+                float bound = pm_bound(st, p, exact);
+                float t = bound - gz -
+                          pm_gap2(st->py, y, n[1], g->lo[1], g->cell[1], p->margin[1], p->box_lo[1],
+                                  p->box_hi[1]);
+                if (t < st->gx)
+                    continue;
+                int xa = b0[0], xb = b1[0];
+                pm_trim(st->px, t, bound, g->lo[0], g->inv_cell[0], g->dims[0], p->margin[0], &xa,
+                        &xb);
+                pm_scan_row(st, row, y, z, xa, xb, p, exact, map, map_start, cell_count, indices,
+                            hole_c, hole);
             }
-            if (ha > hb) { /* the hole misses the row's cells */
-                ha = xb + 1;
-                hb = xb;
+            continue;
+        }
+        for (int y0 = b0[1]; y0 <= b1[1]; y0 += 8) {
+            int rows = min(8, b1[1] - y0 + 1);
+            uint todo = 0u;
+            for (int l = 0; l < rows; ++l) {
+                uint row = plane + (uint)n[0] * (uint)(y0 + l), last = row + (uint)b1[0];
+                todo |=
+                    (map_start[row + (uint)b0[0]] != map_start[last] + cell_count[last] ? 1u : 0u)
+                    << l;
             }
-            if (xa < ha)
-                pm_scan_run(st, map_start[row + (uint)xa],
-                            map_start[row + (uint)(ha - 1)] + cell_count[row + (uint)(ha - 1)], p,
-                            exact, map, indices);
-            if (hb + 1 <= xb)
-                pm_scan_run(st, map_start[row + (uint)(hb + 1)],
-                            map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, exact, map,
-                            indices);
+            if (!todo)
+                continue;
+            float bound = pm_bound(st, p, exact);
+            float8 t = bound - gz -
+                       pm_gap2_8(st->py, (int8)y0 + lane, n[1], g->lo[1], g->cell[1], p->margin[1],
+                                 p->box_lo[1], p->box_hi[1]);
+            todo &= sluice_mask8(t >= (float8)st->gx);
+            if (!todo)
+                continue;
+            float8 reach = sqrt(fmax(t, 0.0f) + bound * 0x1p-18f) + p->margin[0];
+            int xas[8], xbs[8];
+            vstore8(
+                max((int8)b0[0], pm_axis8(st->px - reach, g->lo[0], g->inv_cell[0], g->dims[0])), 0,
+                xas);
+            vstore8(
+                min((int8)b1[0], pm_axis8(st->px + reach, g->lo[0], g->inv_cell[0], g->dims[0])), 0,
+                xbs);
+            while (todo) {
+                int l = popcount((todo & (0u - todo)) - 1u); /* the lowest set bit */
+                todo &= todo - 1u;
+                pm_scan_row(st, plane + (uint)n[0] * (uint)(y0 + l), y0 + l, z, xas[l], xbs[l], p,
+                            exact, map, map_start, cell_count, indices, hole_c, hole);
+            }
         }
     }
 }
