@@ -230,9 +230,13 @@ static inline void pm_take8(pm_state *st, const pm_knn_params *p, global const f
  * side by side (explicit vectors: the CPU's SIMD lanes whatever the
  * work-group vectorizer makes of the loop around it); the photons a block
  * takes are added in order, so the result is the one-at-a-time search's,
- * except for the order of the power sums. Short runs go one at a time. */
-static inline void pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params *p, uint exact,
-                               global const float *map, global uint *indices)
+ * except for the order of the power sums. Short runs go one at a time.
+ * Inlined, as is pm_scan_row, into the box scan: its state and sums stay in
+ * registers (measured, bench/README.md). */
+__attribute__((always_inline)) static inline void pm_scan_run(pm_state *st, uint b, uint e,
+                                                              const pm_knn_params *p, uint exact,
+                                                              global const float *map,
+                                                              global uint *indices)
 {
     uint stride = p->map_stride;
     if (e - b < PM_SHORT_RUN) {
@@ -475,10 +479,10 @@ static inline float8 pm_gap2_8(float x, int8 j, int n, float lo, float cell, flo
 /* Scans the cells [xa, xb] of row `row` (y, z): one run of photons, or two on
  * either side of the hole (the cells already explored, a cube of half-side
  * `hole` about hole_c; none when hole < 0). */
-static inline void pm_scan_row(pm_state *st, uint row, int y, int z, int xa, int xb,
-                               const pm_knn_params *p, uint exact, global const float *map,
-                               global const uint *map_start, global const uint *cell_count,
-                               global uint *indices, const int *hole_c, int hole)
+__attribute__((always_inline)) static inline void
+pm_scan_row(pm_state *st, uint row, int y, int z, int xa, int xb, const pm_knn_params *p,
+            uint exact, global const float *map, global const uint *map_start,
+            global const uint *cell_count, global uint *indices, const int *hole_c, int hole)
 {
     int ha = xb + 1, hb = xb;
     if (hole >= 0 && abs(y - hole_c[1]) <= hole && abs(z - hole_c[2]) <= hole) {
