@@ -233,10 +233,9 @@ static inline void pm_take8(pm_state *st, const pm_knn_params *p, global const f
  * except for the order of the power sums. Short runs go one at a time.
  * Inlined, as is pm_scan_row, into the box scan: its state and sums stay in
  * registers (measured, bench/README.md). */
-__attribute__((always_inline)) static inline void pm_scan_run(pm_state *st, uint b, uint e,
-                                                              const pm_knn_params *p, uint exact,
-                                                              global const float *map,
-                                                              global uint *indices)
+__attribute__((always_inline)) static inline void
+pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params *p, uint exact,
+            global const float *map, global uint *indices, float8 *ar, float8 *ag, float8 *ab)
 {
     uint stride = p->map_stride;
     if (e - b < PM_SHORT_RUN) {
@@ -270,7 +269,6 @@ __attribute__((always_inline)) static inline void pm_scan_run(pm_state *st, uint
         return;
     }
     const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
-    float8 ar = (float8)(0.0f), ag = (float8)(0.0f), ab = (float8)(0.0f);
     for (uint j = b; j < e; j += PM_MAP_BLOCK) {
         float8 dx = vload8(0, map + PM_MAP_X * stride + j) - st->px;
         float8 dy = vload8(0, map + PM_MAP_Y * stride + j) - st->py;
@@ -323,11 +321,8 @@ __attribute__((always_inline)) static inline void pm_scan_run(pm_state *st, uint
                 m = vload8(0, mm);
             }
         }
-        pm_take8(st, p, map, j, m, &ar, &ag, &ab, indices);
+        pm_take8(st, p, map, j, m, ar, ag, ab, indices);
     }
-    st->sr += pm_hsum8(ar);
-    st->sg += pm_hsum8(ag);
-    st->sb += pm_hsum8(ab);
 }
 
 /* The cell-ordered copy of the photon map, one work-item per cell: cell c's
@@ -476,13 +471,24 @@ static inline float8 pm_gap2_8(float x, int8 j, int n, float lo, float cell, flo
     return select((float8)0.0f, gap * gap, gap > 0.0f);
 }
 
+/* Adds the lane sums of a box's photons to the estimate and clears them:
+ * once a box, not once a run (measured, bench/README.md). */
+static inline void pm_fold_sums(pm_state *st, float8 *ar, float8 *ag, float8 *ab)
+{
+    st->sr += pm_hsum8(*ar);
+    st->sg += pm_hsum8(*ag);
+    st->sb += pm_hsum8(*ab);
+    *ar = *ag = *ab = (float8)(0.0f);
+}
+
 /* Scans the cells [xa, xb] of row `row` (y, z): one run of photons, or two on
  * either side of the hole (the cells already explored, a cube of half-side
  * `hole` about hole_c; none when hole < 0). */
 __attribute__((always_inline)) static inline void
 pm_scan_row(pm_state *st, uint row, int y, int z, int xa, int xb, const pm_knn_params *p,
             uint exact, global const float *map, global const uint *map_start,
-            global const uint *cell_count, global uint *indices, const int *hole_c, int hole)
+            global const uint *cell_count, global uint *indices, const int *hole_c, int hole,
+            float8 *ar, float8 *ag, float8 *ab)
 {
     int ha = xb + 1, hb = xb;
     if (hole >= 0 && abs(y - hole_c[1]) <= hole && abs(z - hole_c[2]) <= hole) {
@@ -496,10 +502,11 @@ pm_scan_row(pm_state *st, uint row, int y, int z, int xa, int xb, const pm_knn_p
     if (xa < ha)
         pm_scan_run(st, map_start[row + (uint)xa],
                     map_start[row + (uint)(ha - 1)] + cell_count[row + (uint)(ha - 1)], p, exact,
-                    map, indices);
+                    map, indices, ar, ag, ab);
     if (hb + 1 <= xb)
         pm_scan_run(st, map_start[row + (uint)(hb + 1)],
-                    map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, exact, map, indices);
+                    map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, exact, map, indices,
+                    ar, ag, ab);
 }
 
 /* Boxes at least this many rows high (along y) take their rows 8 at a time
@@ -526,6 +533,7 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
                                const int *hole_c, int hole)
 {
     const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
+    float8 ar = (float8)(0.0f), ag = (float8)(0.0f), ab = (float8)(0.0f);
     for (int z = b0[2]; z <= b1[2]; ++z) {
         float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2], p->box_lo[2],
                            p->box_hi[2]);
@@ -547,7 +555,7 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
                 pm_trim(st->px, t, bound, g->lo[0], g->inv_cell[0], g->dims[0], p->margin[0], &xa,
                         &xb);
                 pm_scan_row(st, row, y, z, xa, xb, p, exact, map, map_start, cell_count, indices,
-                            hole_c, hole);
+                            hole_c, hole, &ar, &ag, &ab);
             }
             continue;
         }
@@ -581,10 +589,12 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
                 int l = popcount((todo & (0u - todo)) - 1u); /* the lowest set bit */
                 todo &= todo - 1u;
                 pm_scan_row(st, plane + (uint)n[0] * (uint)(y0 + l), y0 + l, z, xas[l], xbs[l], p,
-                            exact, map, map_start, cell_count, indices, hole_c, hole);
+                            exact, map, map_start, cell_count, indices, hole_c, hole, &ar, &ag,
+                            &ab);
             }
         }
     }
+    pm_fold_sums(st, &ar, &ag, &ab);
 }
 
 /* One shell for every live query (see the top of the file). */
