@@ -213,12 +213,14 @@ static inline void pm_take8(pm_state *st, const pm_knn_params *p, global const f
     st->count += (uint)popcount((uint)sluice_mask8(m));
 }
 
-/* Runs shorter than this are examined one photon at a time: a block's setup
- * and sums cost more than it saves there (glassball, with Purcell's
- * 250x1x250 grid: runs of one cell of a few photons), while from four
- * photons up the blocks' branch-free tests win (bench_knn's queries in
- * random order most; measured, bench/README.md). */
-#define PM_SHORT_RUN 4u
+/* Runs shorter than this are examined one photon at a time. Since the box
+ * scan keeps its sums in lanes across runs, a block costs little more than
+ * a photon: from two photons up the blocks' branch-free tests win (on
+ * Purcell's 25x25x50 and 250x1x250 grids and on bench_knn's; measured,
+ * bench/README.md). */
+#ifndef PM_SHORT_RUN
+#define PM_SHORT_RUN 2u
+#endif
 /* The same for a hashed grid's buckets, whose blocks also test each
  * photon's cell: there eight stays the faster threshold (measured). */
 #define PM_SHORT_BUCKET 8u
