@@ -544,6 +544,27 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
             }
             next = select(next, (uint16)RT_NEXT_DONE, as_uint16(done));
             vstore16(next, 0, codes + i);
+#ifdef RT_AOS16_
+            /* ids in a run (a block whose 16 rays all came on from one
+             * block of the pass before): the records whole, as rt_setup
+             * writes them (a finished ray's walk is never read; unchanged
+             * fields are written back as read) */
+            const uint16 lane16 =
+                (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+            if (sluice_mask16(as_int16(idv == (uint16)idv.s0 + lane16)) == (ushort)0xffffu) {
+                uint16 steps = as_uint16(rt_gather_i(hw, hat + 4, (int16)-1)) + visited,
+                       tests = tests0 + tested;
+                rt_store_hits16(hits + idv.s0, r.tri, r.t, r.u, r.v, steps, tests);
+                rt_store_walks16(walk + idv.s0, cx, cy, cz, pos);
+                if (rt_any16(done))
+                    rt_maxima_add(maxima, (uint)rt_minmax16(as_int16(steps), done).y,
+                                  (uint)rt_minmax16(as_int16(tests), done).y);
+                tested_all += rt_sum16(tested);
+                visited_all += rt_sum16(visited);
+                done_all += (uint)popcount((uint)sluice_mask16(done));
+                continue;
+            }
+#endif
             uint ts[16], nx[16], tri[16], vs[16], tests[16], changed[16];
             float ft[16], fu[16], fv[16];
             vstore16(tested, 0, ts);
