@@ -6,12 +6,14 @@
  * the stream of live queries, so a pass costs only the queries still
  * searching (Purcell 6.3.3 and 6.4.3: his tiles and occlusion queries; here
  * a sluice_loop watching the live stream's length). Shells without photons
- * are jumped over (a summed-count table over the cells tells), and once a
- * query holds k photons the rest of its search, a radius search then, sweeps
- * every cell left within its radius in one step, row by row, instead of
- * shell after shell: both change the number of passes, never the photons of
- * the estimate (the sweep can change the order of the power sums: the last
- * bits). Queries are taken in the order of their cells (sorted per call), so
+ * are jumped over (a summed-count table over the cells tells); shells that
+ * the same table says cannot bring a query to k photons are swept as one
+ * box, row by row, since every photon they hold that passes is taken in any
+ * order; and once a query holds k photons the rest of its search, a radius
+ * search then, sweeps every cell left within its radius in one step, row by
+ * row, instead of shell after shell: all three change the number of passes,
+ * never the photons of the estimate (the sweeps can change the order of the
+ * power sums: the last bits). Queries are taken in the order of their cells (sorted per call), so
  * that consecutive ones read the same photons from cache.
  *
  * Modes:
