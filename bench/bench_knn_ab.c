@@ -175,9 +175,10 @@ int main(int argc, char **argv)
             ok = bench_parse_uint(val, 1u << 26, &nq) && nq > 0;
         else if (strcmp(a, "--k") == 0)
             ok = bench_parse_uint(val, 4096, &k) && k > 0;
-        else if (strcmp(a, "--mode") == 0)
-            ok = strcmp(val, "atleast") == 0 || strcmp(val, "exact") == 0, mode = val;
-        else if (strcmp(a, "--grid") == 0) {
+        else if (strcmp(a, "--mode") == 0) {
+            mode = val;
+            ok = strcmp(val, "atleast") == 0 || strcmp(val, "exact") == 0;
+        } else if (strcmp(a, "--grid") == 0) {
             char x1, x2, end;
             ok = sscanf(val, "%u%c%u%c%u%c", &dims[0], &x1, &dims[1], &x2, &dims[2], &end) == 5 &&
                  x1 == 'x' && x2 == 'x' && dims[0] && dims[1] && dims[2];
