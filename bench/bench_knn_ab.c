@@ -13,8 +13,13 @@
  * ran 25x25x50 cells for k = 500, cells a fraction of the search radius);
  * by default the grid is the one sr_point_grid_desc_auto makes.
  *
- *   bench_knn_ab [--photons N] [--queries N] [--k K] [--mode atleast|exact]
- *                [--grid XxYxZ] [--pairs N] [--a OPTIONS] [--b OPTIONS]
+ *   bench_knn_ab [--photons N] [--queries N] [--k K]
+ *                [--mode atleast|exact|radius] [--grid XxYxZ | --hashed]
+ *                [--pairs N] [--a OPTIONS] [--b OPTIONS]
+ *
+ * --hashed runs the radius search over the hashed grid (Purcell 6.4.4,
+ * sr_point_hash_desc_auto for the maximum radius), as the progressive
+ * photon mapper does.
  *
  * Exit status 0 when both found the same photon counts and radii for every
  * query and power sums as near as summing the same photons in another order
@@ -45,7 +50,10 @@ static void usage(FILE *out)
             "  --photons N        photons on the surfaces (default 65000)\n"
             "  --queries N        query points on the surfaces (default 262144)\n"
             "  --k K              photons per estimate (default 500)\n"
-            "  --mode M           atleast | exact (default atleast)\n"
+            "  --mode M           atleast | exact | radius (default atleast; radius: every\n"
+            "                     photon within the maximum radius)\n"
+            "  --hashed           the radius search over the hashed grid (implies --mode\n"
+            "                     radius)\n"
             "  --grid XxYxZ       the grid's cells (default: sr_point_grid_desc_auto's for the\n"
             "                     mean k-photon radius)\n"
             "  --pairs N          timed call pairs, after 2 warm-up pairs (default 20)\n"
@@ -77,8 +85,9 @@ static void variant_free(variant *v)
     free(v->seconds);
 }
 
-static int variant_create(variant *v, char name, const rt_grid_desc *d, const pm_photon *ph,
-                          size_t np, const pm_query *qs, size_t nq, unsigned pairs)
+static int variant_create(variant *v, char name, const rt_grid_desc *d,
+                          const sr_point_hash_desc *hd, const pm_photon *ph, size_t np,
+                          const pm_query *qs, size_t nq, unsigned pairs)
 {
     if (!bench_ab_context(PROG, name, v->options, &v->ctx))
         return 0;
@@ -94,8 +103,10 @@ static int variant_create(variant *v, char name, const rt_grid_desc *d, const pm
                 v->seconds ? sluice_context_error(v->ctx) : "out of memory");
         return 0;
     }
-    if (sr_point_grid_build(v->grid, d, v->photons, sizeof(pm_photon), np, SR_POINT_GRID_COUNT,
-                            0) != SLUICE_OK) {
+    if ((hd ? sr_point_grid_build_hashed(v->grid, hd, v->photons, sizeof(pm_photon), np,
+                                         SR_POINT_GRID_COUNT)
+            : sr_point_grid_build(v->grid, d, v->photons, sizeof(pm_photon), np,
+                                  SR_POINT_GRID_COUNT, 0)) != SLUICE_OK) {
         fprintf(stderr, PROG ": variant %c: %s\n", name, sr_point_grid_error(v->grid));
         return 0;
     }
@@ -157,6 +168,7 @@ int main(int argc, char **argv)
     unsigned np = 65000, nq = 262144, k = 500, pairs = 20;
     uint32_t dims[3] = {0, 0, 0};
     const char *mode = "atleast";
+    int hashed = 0;
     variant v[2];
     memset(v, 0, sizeof v);
     v[0].options = v[1].options = "";
@@ -166,6 +178,9 @@ int main(int argc, char **argv)
         if (strcmp(a, "--help") == 0) {
             usage(stdout);
             return 0;
+        } else if (strcmp(a, "--hashed") == 0) {
+            hashed = 1;
+            continue;
         } else if (!val) {
             fprintf(stderr, PROG ": %s: unknown option or missing value (try --help)\n", a);
             return 2;
@@ -177,7 +192,8 @@ int main(int argc, char **argv)
             ok = bench_parse_uint(val, 4096, &k) && k > 0;
         else if (strcmp(a, "--mode") == 0) {
             mode = val;
-            ok = strcmp(val, "atleast") == 0 || strcmp(val, "exact") == 0;
+            ok = strcmp(val, "atleast") == 0 || strcmp(val, "exact") == 0 ||
+                 strcmp(val, "radius") == 0;
         } else if (strcmp(a, "--grid") == 0) {
             char x1, x2, end;
             ok = sscanf(val, "%u%c%u%c%u%c", &dims[0], &x1, &dims[1], &x2, &dims[2], &end) == 5 &&
@@ -195,6 +211,12 @@ int main(int argc, char **argv)
             return 2;
         }
         ++i;
+    }
+    if (hashed && strcmp(mode, "atleast") == 0)
+        mode = "radius";
+    if (hashed && strcmp(mode, "radius") != 0) {
+        fprintf(stderr, PROG ": --hashed serves --mode radius only\n");
+        return 2;
     }
     if (k > np) {
         fprintf(stderr, PROG ": k = %u is above the %u photons\n", k, np);
@@ -215,17 +237,26 @@ int main(int argc, char **argv)
     float radius = (float)sqrt((double)k * area / ((double)np * 3.14159265358979323846));
     const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
     rt_grid_desc d;
+    sr_point_hash_desc hd;
     char err[256];
-    if ((dims[0] ? sr_point_grid_desc_dims(lo, hi, dims, &d, err, sizeof err)
-                 : sr_point_grid_desc_auto(lo, hi, np, radius, &d, err, sizeof err)) != SLUICE_OK) {
+    if ((hashed ? sr_point_hash_desc_auto(lo, hi, np, 2.0f * radius, &hd, err, sizeof err)
+         : dims[0]
+             ? sr_point_grid_desc_dims(lo, hi, dims, &d, err, sizeof err)
+             : sr_point_grid_desc_auto(lo, hi, np, radius, &d, err, sizeof err)) != SLUICE_OK) {
         fprintf(stderr, PROG ": %s\n", err);
         goto done;
     }
-    pm_knn_options o = {
-        k, 2.0f * radius, strcmp(mode, "exact") == 0 ? PM_KNN_EXACT : PM_KNN_ATLEAST, 0, NULL, NULL,
-        0};
-    if (!variant_create(&v[0], 'A', &d, ph, np, qs, nq, pairs) ||
-        !variant_create(&v[1], 'B', &d, ph, np, qs, nq, pairs))
+    pm_knn_options o = {k,
+                        2.0f * radius,
+                        strcmp(mode, "exact") == 0    ? PM_KNN_EXACT
+                        : strcmp(mode, "radius") == 0 ? PM_KNN_RADIUS
+                                                      : PM_KNN_ATLEAST,
+                        0,
+                        NULL,
+                        NULL,
+                        0};
+    if (!variant_create(&v[0], 'A', &d, hashed ? &hd : NULL, ph, np, qs, nq, pairs) ||
+        !variant_create(&v[1], 'B', &d, hashed ? &hd : NULL, ph, np, qs, nq, pairs))
         goto done;
 
     sluice_device_info info;
@@ -235,9 +266,14 @@ int main(int argc, char **argv)
     bench_machine_probe(v[0].ctx, &mach);
     printf("device: %s / %s, %u compute units\nCPU: %s (%s), kernels' block emission: %s\n",
            info.platform, info.name, info.compute_units, mach.cpu, mach.isa, mach.block);
-    printf("%u photons, %u queries, k %u, %s mode, grid %ux%ux%u; A: '%s', B: '%s'; %u call "
-           "pairs (A B, B A)\n",
-           np, nq, k, mode, d.dims[0], d.dims[1], d.dims[2], v[0].options, v[1].options, pairs);
+    char grid[64];
+    if (hashed)
+        snprintf(grid, sizeof grid, "hashed");
+    else
+        snprintf(grid, sizeof grid, "%ux%ux%u", d.dims[0], d.dims[1], d.dims[2]);
+    printf("%u photons, %u queries, k %u, %s mode, grid %s; A: '%s', B: '%s'; %u call pairs (A B, "
+           "B A)\n",
+           np, nq, k, mode, grid, v[0].options, v[1].options, pairs);
     fflush(stdout);
 
     for (int f = -2; f < (int)pairs; ++f) {

@@ -860,7 +860,7 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
         float8 dx = x - st->px, dy = y - st->py, dz = z - st->pz;
         float8 d2 = dx * dx + dy * dy + dz * dz;
         int8 m = (lane < (int8)((int)(e - j))) & (d2 <= (float8)(p->max_r2));
-        if (!any(m))
+        if (!sluice_mask8(m))
             continue;
         m &= (pm_hash_axis8(x, h->lo[0], h->inv_cell) == (int8)(c[0])) &
              (pm_hash_axis8(y, h->lo[1], h->inv_cell) == (int8)(c[1])) &
@@ -871,7 +871,7 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
                        st->nz * vload8(0, map + PM_MAP_DZ * stride + j);
             m &= n < (float8)(0.0f);
         }
-        if (!any(m))
+        if (!sluice_mask8(m))
             continue;
         st->r2 = fmax(st->r2, pm_hmax8(select((float8)(0.0f), d2, m)));
         pm_take8(st, p, map, j, m, &ar, &ag, &ab, indices);
