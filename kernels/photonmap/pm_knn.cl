@@ -49,10 +49,12 @@ static inline float pm_box_d2(const float *qp, const pm_knn_params *p)
  * terms, each within a few ulps of the bound, and the margin covers the
  * cell function's own rounding. (Widening by a whole cell each way instead
  * examined 14% more photons on Purcell's cornell.) */
+#define PM_REACH_(t, bound, margin) (sqrt(fmax((t), 0.0f) + (bound)*0x1p-18f) + (margin))
+
 static inline void pm_trim(float x, float t, float bound, float lo, float inv_cell, uint n,
                            float margin, int *a, int *b)
 {
-    float reach = sqrt(fmax(t, 0.0f) + bound * 0x1p-18f) + margin;
+    float reach = PM_REACH_(t, bound, margin);
     *a = max(*a, (int)pg_axis(x - reach, lo, inv_cell, n));
     *b = min(*b, (int)pg_axis(x + reach, lo, inv_cell, n));
 }
@@ -473,6 +475,13 @@ static inline float8 pm_gap2_8(float x, int8 j, int n, float lo, float cell, flo
     return select((float8)0.0f, gap * gap, gap > 0.0f);
 }
 
+/* Whether the cells [a, b] of row `row` hold photons: two reads. */
+static inline int pm_row_holds(global const uint *map_start, global const uint *cell_count,
+                               uint row, int a, int b)
+{
+    return map_start[row + (uint)a] != map_start[row + (uint)b] + cell_count[row + (uint)b];
+}
+
 /* Adds the lane sums of a box's photons to the estimate and clears them:
  * once a box, not once a run (measured, bench/README.md). */
 static inline void pm_fold_sums(pm_state *st, float8 *ar, float8 *ag, float8 *ab)
@@ -544,8 +553,8 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
         uint plane = (uint)n[0] * (uint)n[1] * (uint)z;
         if (b1[1] - b0[1] + 1 < PM_ROWS8_MIN) {
             for (int y = b0[1]; y <= b1[1]; ++y) {
-                uint row = plane + (uint)n[0] * (uint)y, last = row + (uint)b1[0];
-                if (map_start[row + (uint)b0[0]] == map_start[last] + cell_count[last])
+                uint row = plane + (uint)n[0] * (uint)y;
+                if (!pm_row_holds(map_start, cell_count, row, b0[0], b1[0]))
                     continue;
                 float bound = pm_bound(st, p, exact);
                 float t = bound - gz -
@@ -564,12 +573,10 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
         for (int y0 = b0[1]; y0 <= b1[1]; y0 += 8) {
             int rows = min(8, b1[1] - y0 + 1);
             uint todo = 0u;
-            for (int l = 0; l < rows; ++l) {
-                uint row = plane + (uint)n[0] * (uint)(y0 + l), last = row + (uint)b1[0];
-                todo |=
-                    (map_start[row + (uint)b0[0]] != map_start[last] + cell_count[last] ? 1u : 0u)
-                    << l;
-            }
+            for (int l = 0; l < rows; ++l)
+                todo |= (uint)pm_row_holds(map_start, cell_count,
+                                           plane + (uint)n[0] * (uint)(y0 + l), b0[0], b1[0])
+                        << l;
             if (!todo)
                 continue;
             float bound = pm_bound(st, p, exact);
@@ -579,7 +586,7 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
             todo &= sluice_mask8(t >= (float8)st->gx);
             if (!todo)
                 continue;
-            float8 reach = sqrt(fmax(t, 0.0f) + bound * 0x1p-18f) + p->margin[0];
+            float8 reach = PM_REACH_(t, bound, p->margin[0]);
             int xas[8], xbs[8];
             vstore8(
                 max((int8)b0[0], pm_axis8(st->px - reach, g->lo[0], g->inv_cell[0], g->dims[0])), 0,
@@ -674,92 +681,84 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                 done = 1;
                 break;
             }
-            {
-                /* Shells that cannot bring the estimate to k photons (by the
-                 * summed counts, which include photons the radius or the
-                 * normals will reject) take every photon they hold that
-                 * passes: their order changes nothing, so shells s .. u
-                 * are swept as one box of whole rows, the cube of u less the
-                 * cube explored. u stops where the shells would have
-                 * stopped: at d_u >= the maximum radius, or covering the
-                 * grid. */
-                uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n) : 0u;
-                int u = s - 1;
-                for (;;) {
-                    if (st.count + (pm_cube_count(sat, qc, u + 1, n) - before) >= p.k)
-                        break;
-                    ++u;
-                    int cov;
-                    float du = pm_cube_d2(qp, qc, u, n, &g, &p, &cov);
-                    if (cov || du >= p.max_r2)
-                        break;
-                }
-                if (u > s) {
-                    int b0[3], b1[3];
-                    for (int a = 0; a < 3; ++a) {
-                        b0[a] = max(qc[a] - u, 0);
-                        b1[a] = min(qc[a] + u, n[a] - 1);
-                    }
-                    pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices,
-                                qc, s - 1);
-                    s = u;
-                    float ds2 = pm_cube_d2(qp, qc, s, n, &g, &p, &covered);
-                    full = exact ? st.count == p.k : st.count >= p.k;
-                    reach = exact ? (st.count ? st.hd[0] : 0.0f) : st.r2;
-                    done = covered || ds2 >= p.max_r2 || (full && ds2 >= reach);
-                    continue;
-                }
-            }
-            /* Shells without photons change nothing: the search jumps to the
-             * first shell u >= s that holds photons or at which it would have
-             * ended, by the summed counts (Purcell explores every shell, one a
-             * pass; the estimate is the same, in fewer passes). */
+            /* Shells that cannot bring the estimate to k photons (by the
+             * summed counts, which include photons the radius or the normals
+             * will reject) take every photon they hold that passes: their
+             * order changes nothing, so shells s .. u are swept as one box of
+             * whole rows, the cube of u less the cube explored. u stops where
+             * the shells would have stopped: at d_u >= the maximum radius, or
+             * covering the grid. */
             uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n) : 0u;
-            uint at_s = pm_cube_count(sat, qc, s, n);
-            if (at_s == before) {
-                int lo = s, hi = 0;
-                for (int a = 0; a < 3; ++a)
-                    hi = max(hi, max(qc[a], n[a] - 1 - qc[a]));
-                hi = max(hi, lo);
-                while (lo < hi) {
-                    int mid = lo + (hi - lo) / 2, cov;
-                    float dm = pm_cube_d2(qp, qc, mid, n, &g, &p, &cov);
-                    if (pm_cube_count(sat, qc, mid, n) != before || cov || dm >= p.max_r2 ||
-                        (full && dm >= reach))
-                        hi = mid;
-                    else
-                        lo = mid + 1;
-                }
-                s = lo;
-                at_s = pm_cube_count(sat, qc, s, n);
+            int u = s - 1;
+            for (;;) {
+                if (st.count + (pm_cube_count(sat, qc, u + 1, n) - before) >= p.k)
+                    break;
+                ++u;
+                int cov;
+                float du = pm_cube_d2(qp, qc, u, n, &g, &p, &cov);
+                if (cov || du >= p.max_r2)
+                    break;
             }
-            if (at_s != before) {
-                /* the shell's six faces as boxes of cells, each cell once:
-                 * the faces across x whole, those across y without the x
-                 * faces' cells, those across z without either; a face
-                 * without photons (by the summed counts) is skipped */
-                int lo[3], hi[3], in_lo[3], in_hi[3];
+            if (u > s) {
+                int b0[3], b1[3];
                 for (int a = 0; a < 3; ++a) {
-                    lo[a] = max(qc[a] - s, 0);
-                    hi[a] = min(qc[a] + s, n[a] - 1);
-                    in_lo[a] = max(qc[a] - s + 1, 0);
-                    in_hi[a] = min(qc[a] + s - 1, n[a] - 1);
+                    b0[a] = max(qc[a] - u, 0);
+                    b1[a] = min(qc[a] + u, n[a] - 1);
                 }
-                for (int side = 0; side < 6; ++side) {
-                    int a = side >> 1, at = (side & 1) ? qc[a] + s : qc[a] - s;
-                    if (at < 0 || at >= n[a] || ((side & 1) && s == 0))
-                        continue;
-                    int b0[3], b1[3];
-                    for (int c = 0; c < 3; ++c) {
-                        /* axes before a: inside the faces already done */
-                        b0[c] = c == a ? at : (c > a ? lo[c] : in_lo[c]);
-                        b1[c] = c == a ? at : (c > a ? hi[c] : in_hi[c]);
+                pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices, qc,
+                            s - 1);
+                s = u;
+            } else {
+                /* Shells without photons change nothing: the search jumps to the
+                 * first shell u >= s that holds photons or at which it would have
+                 * ended, by the summed counts (Purcell explores every shell, one a
+                 * pass; the estimate is the same, in fewer passes). */
+                uint at_s = pm_cube_count(sat, qc, s, n);
+                if (at_s == before) {
+                    int lo = s, hi = 0;
+                    for (int a = 0; a < 3; ++a)
+                        hi = max(hi, max(qc[a], n[a] - 1 - qc[a]));
+                    hi = max(hi, lo);
+                    while (lo < hi) {
+                        int mid = lo + (hi - lo) / 2, cov;
+                        float dm = pm_cube_d2(qp, qc, mid, n, &g, &p, &cov);
+                        if (pm_cube_count(sat, qc, mid, n) != before || cov || dm >= p.max_r2 ||
+                            (full && dm >= reach))
+                            hi = mid;
+                        else
+                            lo = mid + 1;
                     }
-                    if (b0[0] > b1[0] || b0[1] > b1[1] || b0[2] > b1[2] ||
-                        pm_box(sat, n, b0[0], b1[0], b0[1], b1[1], b0[2], b1[2]) == 0u)
-                        continue;
-                    pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices,
-                                qc, -1);
+                    s = lo;
+                    at_s = pm_cube_count(sat, qc, s, n);
+                }
+                if (at_s != before) {
+                    /* the shell's six faces as boxes of cells, each cell once:
+                     * the faces across x whole, those across y without the x
+                     * faces' cells, those across z without either; a face
+                     * without photons (by the summed counts) is skipped */
+                    int lo[3], hi[3], in_lo[3], in_hi[3];
+                    for (int a = 0; a < 3; ++a) {
+                        lo[a] = max(qc[a] - s, 0);
+                        hi[a] = min(qc[a] + s, n[a] - 1);
+                        in_lo[a] = max(qc[a] - s + 1, 0);
+                        in_hi[a] = min(qc[a] + s - 1, n[a] - 1);
+                    }
+                    for (int side = 0; side < 6; ++side) {
+                        int a = side >> 1, at = (side & 1) ? qc[a] + s : qc[a] - s;
+                        if (at < 0 || at >= n[a] || ((side & 1) && s == 0))
+                            continue;
+                        int b0[3], b1[3];
+                        for (int c = 0; c < 3; ++c) {
+                            /* axes before a: inside the faces already done */
+                            b0[c] = c == a ? at : (c > a ? lo[c] : in_lo[c]);
+                            b1[c] = c == a ? at : (c > a ? hi[c] : in_hi[c]);
+                        }
+                        if (b0[0] > b1[0] || b0[1] > b1[1] || b0[2] > b1[2] ||
+                            pm_box(sat, n, b0[0], b1[0], b0[1], b1[1], b0[2], b1[2]) == 0u)
+                            continue;
+                        pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count,
+                                    indices, qc, -1);
+                    }
                 }
             }
             float ds2 = pm_cube_d2(qp, qc, s, n, &g, &p, &covered);
