@@ -136,6 +136,15 @@ inline void rt_stream_retire(uint next, global uint *maxima, uint steps, uint te
         walk[id] = w;
 }
 
+/* rt_stream_retire's per-ray maxima for the finished lanes (done) of a
+ * block at once: one reduction each. */
+inline void rt_maxima_add16(global uint *maxima, uint16 steps, uint16 tests, int16 done)
+{
+    if (rt_any16(done))
+        rt_maxima_add(maxima, (uint)rt_minmax16(as_int16(steps), done).y,
+                      (uint)rt_minmax16(as_int16(tests), done).y);
+}
+
 /* One ray of rt_setup (the records after the last block of 16). Returns
  * whether it enters the grid. */
 inline int rt_setup_one(const rt_grid_args *g, global const rt_ray *rays, global uint *codes,
@@ -274,8 +283,7 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
             rt_store_hits16(hits + i, (int16)(-1), r.tmax, (float16)0.0f, (float16)0.0f, visited,
                             (uint16)0u);
             rt_store_walks16(walk + i, cx, cy, cz, pos);
-            if (rt_any16(done))
-                rt_maxima_add(maxima, (uint)rt_minmax16(as_int16(visited), done).y, 0u);
+            rt_maxima_add16(maxima, visited, (uint16)0u, done);
             visited_all += rt_sum16(visited);
 #else
             int wc[4][16];
@@ -556,9 +564,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
                        tests = tests0 + tested;
                 rt_store_hits16(hits + idv.s0, r.tri, r.t, r.u, r.v, steps, tests);
                 rt_store_walks16(walk + idv.s0, cx, cy, cz, pos);
-                if (rt_any16(done))
-                    rt_maxima_add(maxima, (uint)rt_minmax16(as_int16(steps), done).y,
-                                  (uint)rt_minmax16(as_int16(tests), done).y);
+                rt_maxima_add16(maxima, steps, tests, done);
                 tested_all += rt_sum16(tested);
                 visited_all += rt_sum16(visited);
                 done_all += (uint)popcount((uint)sluice_mask16(done));
