@@ -16,13 +16,14 @@
 #   gpu-contig    the same in the CPU's layout -> streams-h100-contiguous.json
 #   gpu-chunks=LIST  the same in its own layout with SLUICE_CHUNK (records
 #                 per work-item) at each value of LIST -> streams-h100-chunk-N.json
-#   gpu-tests     the suite on the GPU (SLUICE_DEVICE=NVIDIA), less what needs
-#                 OpenImageIO (not carried) or PoCL's own options;
+#   gpu-tests     the suite on the GPU (SLUICE_DEVICE=NVIDIA), less what reads
+#                 or writes images (OpenImageIO is not carried) or needs
+#                 PoCL's own options;
 #                 gpu-tests=REGEX only the tests REGEX matches (ctest -R)
 #   gpu-raytrace  bench_raytrace on the GPU -> raytrace-h100.json
 #   scaling=LIST  bench/bench_scaling.py on PoCL, threads in LIST's order
 #                 (1 first) -> scaling-xeon16.json, the runs in scaling-runs.tar
-#   libs-probe    which libraries of the OpenImageIO programs' closure (the
+#   libs-probe    which libraries of the image module's closure (the
 #                 sonames in .carry/oiio-libs.txt, one a line: `ldd` here) the
 #                 machine lacks -> oiio-missing.txt, so that a later call can
 #                 carry just those and run the whole suite there
@@ -30,16 +31,17 @@
 # LENT_DEVICE (default NVIDIA) names the device of the gpu phases, so that
 # the script can be tried on any machine first (LENT_DEVICE=pthread).
 # What it expects: the build in ./build (made on Debian 12, with rpaths
-# relative to the binaries), and the Debian libraries the non-OpenImageIO
-# binaries link in .carry/libs.tar.xz, flat (the call carries both). The
-# build's tests name /work/main, so that path is linked to this tree.
+# relative to the binaries), and the Debian libraries the binaries link
+# (not the image module's OpenImageIO) in .carry/libs.tar.xz, flat (the
+# call carries both). The build's tests name /work/main, so that path is
+# linked to this tree.
 #
 #   bench/lent_machine.sh --pack
 #
 # makes .carry here, on the machine that built ./build: the libraries (the
-# `ldd` closure of every program that does not link OpenImageIO, less
-# glibc's and the compiler's own, which the lent machine has newer), glmark2's
-# bunny and the sonames the OpenImageIO programs need (for libs-probe); then
+# `ldd` closure of every program, less glibc's and the compiler's own, which
+# the lent machine has newer), glmark2's bunny and the sonames the image
+# module needs (for libs-probe); then
 # call the tool with carry ["build", ".carry"].
 set -u
 if [ "${1:-}" = --pack ]; then
@@ -51,18 +53,16 @@ if [ "${1:-}" = --pack ]; then
         build/apps/photonmap/sluice-photonmap; do
         [ -x "$b" ] && [ -f "$b" ] && progs="$progs $b"
     done
-    plain=""
-    oiio=""
-    for b in $progs; do
-        if ldd "$b" | grep -q OpenImageIO; then oiio="$oiio $b"; else plain="$plain $b"; fi
-    done
+    # No program links OpenImageIO: it sits in the image module, loaded on
+    # first use (apps/common/image.h), whose closure is libs-probe's.
     # shellcheck disable=SC2086
-    ldd $plain | awk '$3 ~ /^\// {print $3}' | sort -u | grep -v "$(pwd)/build" |
+    ldd $progs | awk '$3 ~ /^\// {print $3}' | sort -u | grep -v "$(pwd)/build" |
         grep -vE '/(libc|libm|libgcc_s|libstdc\+\+)\.so' >.carry/libs.txt
     # shellcheck disable=SC2046
     tar -chPf - --transform='s,.*/,,' $(cat .carry/libs.txt) | xz -6 -T0 >.carry/libs.tar.xz
     # shellcheck disable=SC2086
-    ldd $oiio | awk '$3 ~ /^\// {print $1}' | sort -u | grep -v libsluice >.carry/oiio-libs.txt
+    ldd build/apps/common/libsluice-image-oiio.so | awk '$3 ~ /^\// {print $1}' | sort -u |
+        grep -v libsluice >.carry/oiio-libs.txt
     cp /usr/share/glmark2/models/bunny.obj .carry/
     du -sh .carry build
     # the tool carries 64 MiB at most; PoCL's caches are no use there

@@ -614,6 +614,25 @@ static void test_imgdiff(void)
     CHECK(rc == 2, "--metric ssim: exit %d", rc);
     rc = run_imgdiff(a, b, c, NULL, NULL, NULL);
     CHECK(rc == 2, "three images: exit %d", rc);
+
+    /* The image module (OpenImageIO) loaded on first use: a missing one and
+     * a file that is no module are clear errors naming the path, not a
+     * crash; --help needs no module. */
+    char bogus[256];
+    snprintf(bogus, sizeof bogus, "%s/no-such-module.so", dir);
+    setenv("SLUICE_IMAGE_MODULE", bogus, 1);
+    rc = run_imgdiff(a, b, NULL, NULL, NULL, NULL);
+    CHECK(rc == 2 && strstr(err_text, bogus) && strstr(err_text, "image module"),
+          "missing module: exit %d: %s", rc, err_text);
+    rc = run_imgdiff("--help", NULL, NULL, NULL, NULL, NULL);
+    CHECK(rc == 0 && strstr(out_text, "usage"), "--help without the module: %d", rc);
+    setenv("SLUICE_IMAGE_MODULE", a, 1); /* an EXR file, not a library */
+    rc = run_imgdiff(a, b, NULL, NULL, NULL, NULL);
+    CHECK(rc == 2 && strstr(err_text, a) && strstr(err_text, "image module"),
+          "a file that is no module: exit %d: %s", rc, err_text);
+    unsetenv("SLUICE_IMAGE_MODULE");
+    rc = run_imgdiff(a, b, NULL, NULL, NULL, NULL);
+    CHECK(rc == 0, "module found again: exit %d (%s)", rc, err_text);
 }
 
 int main(int argc, char **argv)

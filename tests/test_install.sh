@@ -66,6 +66,7 @@ STAGE=$DEST$PREFIX
 
 # 2. The layout: library, headers, pkg-config file, programs, data, docs.
 for f in "$LIBDIR_REL/libsluice.so" "$LIBDIR_REL/pkgconfig/sluice.pc" \
+    "$LIBDIR_REL/sluice/libsluice-image-oiio.so" \
     include/sluice/sluice.h include/sluice/streams.h include/sluice/sluice.cl \
     "$BINDIR/sluice-raytrace" "$BINDIR/sluice-photonmap" "$BINDIR/sluice-info" \
     "$BINDIR/sluice-scene" "$BINDIR/sluice-imgdiff" \

@@ -899,6 +899,18 @@ static void test_cli(const char *exe)
     }
     snprintf(cmd, sizeof cmd, "%s --help", exe);
     CHECK(check_run(cmd, out, sizeof out) == 0 && strstr(out, "examples"), "--help");
+    /* Without its image module (OpenImageIO) the renderer stops before
+     * rendering, naming where it looked, and writes nothing. */
+    remove("cli_nomod.png");
+    snprintf(cmd, sizeof cmd,
+             "SLUICE_IMAGE_MODULE=no-such-dir/m.so %s --scene cornell --size 32x24 "
+             "--out cli_nomod.png",
+             exe);
+    int nomod = check_run(cmd, out, sizeof out);
+    CHECK(nomod == 1 && strstr(out, "no-such-dir/m.so") && strstr(out, "--out cli_nomod.png") &&
+              !strstr(out, "rays:"),
+          "no image module: exit %d: %s", nomod, out);
+    CHECK(access("cli_nomod.png", F_OK) != 0, "no image module: an image was written");
 
     snprintf(cmd, sizeof cmd,
              "%s --scene cornell --mode shadow --size 32x24 --exec fused --out cli_ok.exr "

@@ -117,10 +117,18 @@ float sr_srgb_encode(float linear);
 float sr_srgb_decode(float encoded);
 
 /* ------------------------------------------------------------------ */
-/* OpenImageIO shim (image_io.cpp). Used by image.c; other code should  */
-/* call sr_image_read/write. These functions take no file-naming   */
+/* The image I/O module. Used by image.c; other code should call        */
+/* sr_image_read/write. These functions take no file-naming             */
 /* responsibility: their messages are OpenImageIO's, and the callers    */
 /* above prefix the path.                                               */
+/*                                                                      */
+/* OpenImageIO and the ~250 libraries it links live in a module of      */
+/* their own (image_io.cpp, libsluice-image-oiio.so), loaded on the     */
+/* first call of one of these functions (image_io_module.c): linked     */
+/* into every program, they made start-up slow (the dynamic linker's    */
+/* relocations; bench/README.md has the figures) and every kernel       */
+/* library PoCL loads later searched that scope too. A program that     */
+/* reads or writes no image never loads them.                           */
 /* ------------------------------------------------------------------ */
 
 /** What sr_image_io_open() learned about a file. */
@@ -136,8 +144,16 @@ typedef struct sr_image_io_info {
 
 typedef struct sr_image_io_reader sr_image_io_reader;
 
+/** Pixel types sr_image_io_write() takes. */
+typedef enum sr_image_io_type {
+    SR_IMAGE_IO_FLOAT, /**< float, stored as 32-bit float where possible */
+    SR_IMAGE_IO_UINT8  /**< uint8_t, stored as is, tagged sRGB */
+} sr_image_io_type;
+
 /** Opens `path` for reading and fills `*info`. Returns SLUICE_ERROR_IO with
- *  OpenImageIO's message when it cannot, SLUICE_ERROR_OUT_OF_MEMORY. */
+ *  OpenImageIO's message when it cannot (or when the module cannot be
+ *  loaded: the message says where it was looked for),
+ *  SLUICE_ERROR_OUT_OF_MEMORY. */
 sluice_status sr_image_io_open(const char *path, sr_image_io_reader **out, sr_image_io_info *info,
                                char *err, size_t err_size);
 
@@ -150,18 +166,47 @@ sluice_status sr_image_io_read(sr_image_io_reader *r, int chbegin, int chend, fl
 /** Closes a reader from sr_image_io_open(); NULL is allowed. */
 void sr_image_io_close(sr_image_io_reader *r);
 
-/** Pixel types sr_image_io_write() takes. */
-typedef enum sr_image_io_type {
-    SR_IMAGE_IO_FLOAT, /**< float, stored as 32-bit float where possible */
-    SR_IMAGE_IO_UINT8  /**< uint8_t, stored as is, tagged sRGB */
-} sr_image_io_type;
-
 /** Writes width x height pixels of `channels` interleaved values of `type`
  *  to `path`, in the format OpenImageIO picks from its extension. Alpha,
- *  if any, is the fourth channel and is stored unassociated. */
+ *  if any, is the fourth channel and is stored unassociated. Returns
+ *  SLUICE_ERROR_IO as sr_image_io_open() does. */
 sluice_status sr_image_io_write(const char *path, unsigned width, unsigned height,
                                 unsigned channels, sr_image_io_type type, const void *pixels,
                                 char *err, size_t err_size);
+
+/** Loads the image module now, if not yet loaded, waiting for a load that
+ *  sr_image_io_preload() began. A program that will write an image calls it
+ *  before long work, so that a missing module is an error at the start and
+ *  not lost output at the end. Returns SLUICE_OK, or SLUICE_ERROR_IO with
+ *  the reason (where the module was looked for) in `err`. */
+sluice_status sr_image_io_load(char *err, size_t err_size);
+
+/** Begins loading the image module on a thread of its own and returns at
+ *  once, so that the load overlaps the caller's own start-up work; a later
+ *  image call or sr_image_io_load() waits for it. Without threads it does
+ *  nothing (the module is then loaded on first use). */
+void sr_image_io_preload(void);
+
+/** Bumped whenever sr_image_io_module or the functions' meaning changes,
+ *  so that a stale module is refused with a message instead of called. */
+#define SR_IMAGE_IO_ABI 1u
+
+/** The module's functions, which the ones above call. */
+typedef struct sr_image_io_module {
+    unsigned abi; /**< SR_IMAGE_IO_ABI of the module's build */
+    sluice_status (*open)(const char *path, sr_image_io_reader **out, sr_image_io_info *info,
+                          char *err, size_t err_size);
+    sluice_status (*read)(sr_image_io_reader *r, int chbegin, int chend, float *pixels, char *err,
+                          size_t err_size);
+    void (*close)(sr_image_io_reader *r);
+    sluice_status (*write)(const char *path, unsigned width, unsigned height, unsigned channels,
+                           sr_image_io_type type, const void *pixels, char *err, size_t err_size);
+} sr_image_io_module;
+
+/** The module's one exported symbol (SR_IMAGE_IO_MODULE_SYMBOL): its
+ *  function table, static, never NULL. */
+const sr_image_io_module *sr_image_io_module_get(void);
+#define SR_IMAGE_IO_MODULE_SYMBOL "sr_image_io_module_get"
 
 #ifdef __cplusplus
 }

@@ -1,7 +1,9 @@
-/* The OpenImageIO shim: the only C++ in the tree. It opens, reads and writes
- * files and nothing more; colour handling, channel mapping, size limits and
- * atomic replacement live in image.c. No exception may cross into C, so
- * every entry point catches everything. */
+/* The OpenImageIO shim: the only C++ in the tree, built as a module of its
+ * own (libsluice-image-oiio.so) that image_io_module.c loads on first use;
+ * it exports nothing but sr_image_io_module_get() (image.h). It opens, reads
+ * and writes files and nothing more; colour handling, channel mapping, size
+ * limits and atomic replacement live in image.c. No exception may cross into
+ * C, so every entry point catches everything. */
 #include "image.h"
 #include "app_error.h"
 
@@ -47,8 +49,8 @@ static std::string one_line(std::string s, const char *fallback)
     return s.empty() ? std::string(fallback) : s;
 }
 
-extern "C" sluice_status sr_image_io_open(const char *path, sr_image_io_reader **out,
-                                          sr_image_io_info *info, char *err, size_t err_size)
+static sluice_status io_open(const char *path, sr_image_io_reader **out, sr_image_io_info *info,
+                             char *err, size_t err_size)
 {
     if (out)
         *out = nullptr;
@@ -88,8 +90,8 @@ extern "C" sluice_status sr_image_io_open(const char *path, sr_image_io_reader *
     }
 }
 
-extern "C" sluice_status sr_image_io_read(sr_image_io_reader *r, int chbegin, int chend,
-                                          float *pixels, char *err, size_t err_size)
+static sluice_status io_read(sr_image_io_reader *r, int chbegin, int chend, float *pixels,
+                             char *err, size_t err_size)
 {
     if (!r || !pixels || chbegin < 0 || chend <= chbegin || chend > r->in->spec().nchannels) {
         sr_set_error(err, err_size, "bad arguments to sr_image_io_read");
@@ -107,7 +109,7 @@ extern "C" sluice_status sr_image_io_read(sr_image_io_reader *r, int chbegin, in
     }
 }
 
-extern "C" void sr_image_io_close(sr_image_io_reader *r)
+static void io_close(sr_image_io_reader *r)
 {
     if (!r)
         return;
@@ -120,9 +122,8 @@ extern "C" void sr_image_io_close(sr_image_io_reader *r)
     delete r;
 }
 
-extern "C" sluice_status sr_image_io_write(const char *path, unsigned width, unsigned height,
-                                           unsigned channels, sr_image_io_type type,
-                                           const void *pixels, char *err, size_t err_size)
+static sluice_status io_write(const char *path, unsigned width, unsigned height, unsigned channels,
+                              sr_image_io_type type, const void *pixels, char *err, size_t err_size)
 {
     if (!path || !pixels || !width || !height || !channels || channels > 4 ||
         width > SR_IMAGE_MAX_SIDE || height > SR_IMAGE_MAX_SIDE) {
@@ -155,4 +156,11 @@ extern "C" sluice_status sr_image_io_write(const char *path, unsigned width, uns
     } catch (...) {
         return caught(err, err_size);
     }
+}
+
+extern "C" __attribute__((visibility("default"))) const sr_image_io_module *
+sr_image_io_module_get(void)
+{
+    static const sr_image_io_module table = {SR_IMAGE_IO_ABI, io_open, io_read, io_close, io_write};
+    return &table;
 }

@@ -453,6 +453,8 @@ int main(int argc, char **argv)
         fprintf(stderr, PROG ": %s\n", err);
         goto done;
     }
+    if (sr_cli_images_ready(PROG, cc))
+        goto done;
     if (cc->profile)
         sluice_profile_reset(ctx);
     double t0 = sr_clock_seconds();

@@ -257,6 +257,8 @@ int main(int argc, char **argv)
         fprintf(stderr, PROG ": %s\n", err);
         goto done;
     }
+    if (sr_cli_images_ready(PROG, cc))
+        goto done;
     if (cc->profile)
         sluice_profile_reset(ctx);
     run r = {rend, cc->out, ctx};

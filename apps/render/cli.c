@@ -2,6 +2,7 @@
 #include "cli.h"
 
 #include "data_path.h"
+#include "image.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -252,6 +253,21 @@ int sr_cli_context(const char *prog, const sr_cli_common *c, sluice_context **ou
     co.profile = c->profile;
     if (sluice_context_create(&co, out, err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, "%s: OpenCL: %s\n", prog, err);
+        return 1;
+    }
+    /* Every run writes an image: the image module loads while the caller
+     * builds its renderer (sr_cli_images_ready() waits for it). Begun only
+     * now, after OpenCL's own libraries: both loads hold the dynamic
+     * linker's lock. */
+    sr_image_io_preload();
+    return 0;
+}
+
+int sr_cli_images_ready(const char *prog, const sr_cli_common *c)
+{
+    char err[1024] = "";
+    if (sr_image_io_load(err, sizeof err) != SLUICE_OK) {
+        fprintf(stderr, "%s: --out %s: %s\n", prog, c->out, err);
         return 1;
     }
     return 0;
