@@ -174,18 +174,12 @@ sluice_status sr_image_io_write(const char *path, unsigned width, unsigned heigh
                                 unsigned channels, sr_image_io_type type, const void *pixels,
                                 char *err, size_t err_size);
 
-/** Loads the image module now, if not yet loaded, waiting for a load that
- *  sr_image_io_preload() began. A program that will write an image calls it
- *  before long work, so that a missing module is an error at the start and
- *  not lost output at the end. Returns SLUICE_OK, or SLUICE_ERROR_IO with
- *  the reason (where the module was looked for) in `err`. */
+/** Loads the image module now, if not yet loaded. A program that will
+ *  write an image calls it before long work, so that a missing module is an
+ *  error at the start and not lost output at the end. Returns SLUICE_OK, or
+ *  SLUICE_ERROR_IO with the reason (where the module was looked for) in
+ *  `err`. */
 sluice_status sr_image_io_load(char *err, size_t err_size);
-
-/** Begins loading the image module on a thread of its own and returns at
- *  once, so that the load overlaps the caller's own start-up work; a later
- *  image call or sr_image_io_load() waits for it. Without threads it does
- *  nothing (the module is then loaded on first use). */
-void sr_image_io_preload(void);
 
 /** Bumped whenever sr_image_io_module or the functions' meaning changes,
  *  so that a stale module is refused with a message instead of called. */

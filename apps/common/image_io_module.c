@@ -122,20 +122,6 @@ sluice_status sr_image_io_load(char *err, size_t err_size)
     return module_get(err, err_size) ? SLUICE_OK : SLUICE_ERROR_IO;
 }
 
-static void *preload_main(void *unused)
-{
-    (void)unused;
-    pthread_once(&module_once, module_load);
-    return NULL;
-}
-
-void sr_image_io_preload(void)
-{
-    pthread_t t;
-    if (pthread_create(&t, NULL, preload_main, NULL) == 0)
-        pthread_detach(t);
-}
-
 sluice_status sr_image_io_open(const char *path, sr_image_io_reader **out, sr_image_io_info *info,
                                char *err, size_t err_size)
 {

@@ -255,11 +255,6 @@ int sr_cli_context(const char *prog, const sr_cli_common *c, sluice_context **ou
         fprintf(stderr, "%s: OpenCL: %s\n", prog, err);
         return 1;
     }
-    /* Every run writes an image: the image module loads while the caller
-     * builds its renderer (sr_cli_images_ready() waits for it). Begun only
-     * now, after OpenCL's own libraries: both loads hold the dynamic
-     * linker's lock. */
-    sr_image_io_preload();
     return 0;
 }
 

@@ -68,9 +68,9 @@ sr_adaptive_options sr_cli_sampling(const sr_cli_common *c);
  *  else 1 after printing "PROG: OpenCL: why". */
 int sr_cli_context(const char *prog, const sr_cli_common *c, sluice_context **out);
 
-/** Waits until the image module (image.h) is loaded, which
- *  sr_cli_context() began: 0, or 1 after printing "PROG: --out FILE: why",
- *  so that a program fails before rendering rather than lose its image. */
+/** Loads the image module (image.h) now: 0, or 1 after printing
+ *  "PROG: --out FILE: why", so that a program fails before rendering rather
+ *  than lose its image. */
 int sr_cli_images_ready(const char *prog, const sr_cli_common *c);
 
 /** Prints the common options' lines of --help. */
