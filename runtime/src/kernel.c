@@ -225,20 +225,12 @@ sluice_status sluice_kernel_set_counters(sluice_kernel *k, sluice_counters *coun
  * outputs' counts the host scans one per group (group order, sluice.cl).
  * On CPUs a multiple of 16 records, so that kernels taking 16 records at a
  * time leave a tail only in the input's last chunk (bench/README.md, "The
- * stream mode's 3x on Zen 4"). A chained launch of ordered outputs
- * (`chained`, sluice.cl's mode 3) aims for about 256 chunks of up to 65536
- * records (256 KiB of 4-byte records, counted and then written from L2):
- * each chunk waits for the one before it (bench/README.md, "Ordered outputs
- * in one launch"). */
-static size_t choose_chunk(const sluice_context *ctx, size_t bound, int chained)
+ * stream mode's 3x on Zen 4"). */
+static size_t choose_chunk(const sluice_context *ctx, size_t bound)
 {
     if (ctx->chunk)
         return ctx->chunk;
     size_t lo = 16, hi = 16384, want = bound / 1024;
-    if (chained) { /* fewer, longer chunks: fewer links in the chain */
-        hi = 65536;
-        want = bound / 256;
-    }
     if (ctx->layout == SLUICE_LAYOUT_INTERLEAVED) {
         lo = 1;
         hi = 64;
@@ -387,8 +379,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         else
             any_unordered = 1;
     }
-    const int chained = L.ordered_mask && ctx->layout != SLUICE_LAYOUT_INTERLEAVED && ctx->chain;
-    size_t chunk = choose_chunk(ctx, bound, chained);
+    size_t chunk = choose_chunk(ctx, bound);
     size_t chunks = (bound + chunk - 1) / chunk;
     size_t global = sl_round_up(chunks ? chunks : 1, k->group);
     L.chunk = (cl_uint)chunk;
@@ -412,7 +403,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
     sluice_status st = SLUICE_OK;
     L.interleave = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
     if (queued) {
-        if (chained) {
+        if (L.ordered_mask && !L.interleave && ctx->chain) {
             /* One chained launch (sluice.cl, mode 3): the chunks' ends,
              * then a row of flags and the ticket, zeroed first. Its
              * work-groups hold one work-item each: PoCL runs a group's
