@@ -25,10 +25,9 @@
  * room for the whole chunk with one global atomic per output and writing the
  * records (pass 1). This is Purcell's conditional output stream (thesis 3.1.2)
  * without the per-record atomics that make it slow: at most one global atomic
- * per chunk and output. For ORDERED outputs the chunks are chained in one
- * launch instead (mode 3, sluice_chain_places_): each work-item waits, after
- * counting, for where the chunk before it ends, so records keep the order
- * of the input, and the chunk is read from memory once.
+ * per chunk and output. For ORDERED outputs the counts go to a scratch array
+ * instead, the host scans it, and a second launch writes at the scanned
+ * offsets, so records keep the order of the input.
  *
  * On a GPU (the runtime's interleaved layout, sluice_layout in sluice.h)
  * the work-items of a group take the records of their chunks together, one
@@ -96,8 +95,7 @@ typedef struct sluice_launch_ {
     uint n_fixed;      /* input length when the host knows it, else SLUICE_NONE */
     uint in_var;       /* index of the input length in the variable pool */
     uint chunk;        /* records per work-item */
-    uint mode;         /* 0: one launch, 1: ordered count launch, 2: ordered write,
-                          3: ordered in one chained launch (chunks, below) */
+    uint mode;         /* 0: one launch, 1: ordered count launch, 2: ordered write */
     uint first_pass;   /* 0 when the count pass runs, else 1 */
     uint ordered_mask; /* bit k: output k is ordered */
     uint out_mask;     /* bit k: output k is bound */
@@ -283,24 +281,6 @@ inline void sluice_range_places_(sluice_state_ *s)
 /* Records per block of SLUICE_FOR_EACH_BLOCK in the interleaved layout. */
 #define SLUICE_BLOCK 4u
 
-/* Ordered outputs in one launch (mode 3, the contiguous layout): a chained
- * scan of the chunks' counts. Each work-item takes its chunk by a ticket
- * (a global atomic), in the order work-items start, counts its records
- * (pass 0), waits until the chunk before it has published where its
- * records end, publishes its own end and writes its records (pass 1) while
- * they are still in its core's cache. The input is read from memory once,
- * where a count launch and a write launch read it twice. Waiting is safe
- * because a ticket is taken when a work-item starts: the chunk before is
- * held by a work-item that has started and waits only on earlier ones.
- * Scratch: per ordered output k, the end of chunk c's records (inclusive
- * prefix) at k * stride + c + 1; then a row of flags, one per chunk (set
- * once its ends are published), and the ticket after them; the host zeroes
- * the flags and the ticket before the launch. */
-inline global uint *sluice_chain_flags_(global uint *scratch, const sluice_launch_ *L)
-{
-    return scratch + (32u - clz(L->ordered_mask)) * L->stride;
-}
-
 /* The records of this work-item. Contiguous chunks (the range form, or a
  * launch without `interleave`): work-item i takes [i chunk, (i + 1) chunk),
  * the layout for CPUs, where one work-item walking its chunk runs like a C
@@ -311,7 +291,7 @@ inline global uint *sluice_chain_flags_(global uint *scratch, const sluice_launc
  * read neighbouring records; in the block form every G-th block of
  * SLUICE_BLOCK records from the l-th. Ordered outputs are then placed in
  * group order (above). */
-inline void sluice_begin_(sluice_state_ *s, global uint *vars, global uint *scratch,
+inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
                           local uint *lds, const sluice_launch_ *L, int form)
 {
     uint n = L->n_fixed;
@@ -321,8 +301,6 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global uint *scra
             sluice_set_lengths_(vars, L, n);
     }
     uint id = (uint)get_global_id(0);
-    if (L->mode == 3u) /* the chunk by ticket, in start order (above) */
-        id = atomic_inc(sluice_chain_flags_(scratch, L) + (L->stride - 1u));
     s->chunk_id = id;
     const int inter = L->interleave && form != SLUICE_FORM_RANGE_;
     if (inter) {
@@ -464,43 +442,6 @@ inline void sluice_group_reserve_(sluice_state_ *s, global uint *vars, global ui
 #endif
 }
 
-/* A chained launch's places of its ordered outputs (mode 3, above), after
- * the count pass: the chunk before's ends (the outputs' lengths for the
- * first chunk: records are appended), this chunk's published, its records'
- * places. A void output stays void: nothing is written and its length is
- * left alone. The last chunk sets the lengths, unless the input overflowed
- * (work-item 0 then made the outputs void, sluice_set_lengths_). */
-inline void sluice_chain_places_(sluice_state_ *s, global uint *vars, global uint *scratch,
-                                 const sluice_launch_ *L)
-{
-    global uint *flags = sluice_chain_flags_(scratch, L);
-    volatile global uint *ends = (volatile global uint *)scratch;
-    uint c = s->chunk_id;
-    if (c > 0u) {
-        while (((volatile global uint *)flags)[c - 1u] == 0u)
-            ;
-        read_mem_fence(CLK_GLOBAL_MEM_FENCE);
-    }
-    uint end[SLUICE_MAX_OUTPUTS];
-    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
-        end[k] = 0u;
-        if (!((L->ordered_mask >> k) & 1u))
-            continue;
-        uint start = c > 0u ? ends[k * L->stride + c] : vars[L->out_var[k]];
-        int is_void = start == SLUICE_VOID_;
-        end[k] = is_void ? SLUICE_VOID_ : start + s->cnt[k];
-        ends[k * L->stride + c + 1u] = end[k];
-        s->pos[k] = is_void ? 0u : start;
-        s->lim[k] = is_void ? 0u : (uint)min((ulong)start + s->cnt[k], (ulong)L->out_cap[k]);
-    }
-    write_mem_fence(CLK_GLOBAL_MEM_FENCE);
-    atomic_xchg(&flags[c], 1u);
-    if (c + 2u == L->stride && (L->n_fixed != SLUICE_NONE || vars[L->in_var] <= L->in_cap))
-        for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
-            if (((L->ordered_mask >> k) & 1u) && end[k] != SLUICE_VOID_)
-                vars[L->out_var[k]] = end[k];
-}
-
 /* Runs between the passes and after the last one. */
 inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scratch,
                          const sluice_launch_ *L)
@@ -520,8 +461,6 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
                 s->pos[k] = sluice_reserve_(vars, L, k, s->cnt[k], &s->lim[k]);
             }
         }
-        if (L->mode == 3u)
-            sluice_chain_places_(s, vars, scratch, L);
     } else {
         for (uint c = 0; c < L->n_counters; ++c)
             if (s->ctr[c])

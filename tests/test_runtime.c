@@ -857,20 +857,12 @@ static void test_profile_rows(sluice_context *ctx, sluice_program *p)
     CHECK_OK(ctx, sluice_scan(ctx, out[0], scanned, SLUICE_U32, 0, NULL));
     CHECK_OK(ctx, sluice_scan(ctx, in, scanned, SLUICE_U32, 0, NULL));
 
-    /* Ordered outputs take a count launch, a scan of the chunks' counts
-     * (sluice_scan_chunk_counts) and a write launch in the interleaved layout
-     * (GPUs, SLUICE_LAYOUT=interleaved) or with SLUICE_CHAIN=0; one chained
-     * launch in the contiguous layout (CPUs). */
-    sluice_device_info dev;
-    CHECK_OK(ctx, sluice_context_device(ctx, &dev));
-    const char *layout = getenv("SLUICE_LAYOUT"), *chain = getenv("SLUICE_CHAIN");
-    int interleaved = layout && *layout ? strcmp(layout, "interleaved") == 0 : !dev.is_cpu;
-    int two_launches = interleaved || (chain && strcmp(chain, "0") == 0);
     size_t count = sluice_profile_count(ctx);
     sluice_profile_entry e;
-    CHECK(count == 5u + (size_t)two_launches,
-          "%d kernels ran (scale, split3,%s 3 scan passes), the profile has %zu entries",
-          5 + two_launches, two_launches ? " sluice_scan_chunk_counts," : "", count);
+    CHECK(count == 6,
+          "6 kernels ran (scale, split3, sluice_scan_chunk_counts, 3 scan passes), "
+          "the profile has %zu entries",
+          count);
     for (size_t i = 0; i < count; ++i) {
         CHECK_OK(ctx, sluice_profile_get(ctx, i, &e));
         CHECK(e.launches > 0 && strcmp(e.name, "dup") != 0, "entry %zu: %s, %llu launches", i,
@@ -896,12 +888,8 @@ static void test_profile_rows(sluice_context *ctx, sluice_program *p)
           (unsigned long long)e.bytes);
     CHECK(profile_find(ctx, "scan_chunks_u32", &e) && e.records_in > 0,
           "scan_chunks_u32: %llu records in", (unsigned long long)e.records_in);
-    if (two_launches)
-        CHECK(profile_find(ctx, "sluice_scan_chunk_counts", &e) && e.records_in > 0,
-              "sluice_scan_chunk_counts: %llu records in", (unsigned long long)e.records_in);
-    else
-        CHECK(!profile_find(ctx, "sluice_scan_chunk_counts", &e),
-              "a chained launch needs no scan of chunk counts");
+    CHECK(profile_find(ctx, "sluice_scan_chunk_counts", &e) && e.records_in > 0,
+          "sluice_scan_chunk_counts: %llu records in", (unsigned long long)e.records_in);
 
     /* The printed table and the JSON have the same rows. */
     FILE *f = tmpfile();

@@ -226,10 +226,6 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     ctx->prof_epoch = 1;
     ctx->no_simd = opt.no_simd;
     ctx->verbose = opt.verbose;
-    /* SLUICE_CHAIN=0: ordered outputs by a count launch, a scan and a write
-     * launch, as in the interleaved layout, to compare with (bench/README.md) */
-    const char *chain_env = getenv("SLUICE_CHAIN");
-    ctx->chain = !(chain_env && strcmp(chain_env, "0") == 0);
     ctx->build_options = sl_strdup(opt.build_options ? opt.build_options : "");
     if (!ctx->build_options) {
         free(ctx);

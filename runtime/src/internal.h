@@ -94,7 +94,6 @@ struct sluice_context {
     int profile;
     int no_simd;           /* programs are built with -DSLUICE_NO_SIMD */
     int verbose;           /* builds print their compiler log on stderr */
-    int chain;             /* ordered outputs of contiguous launches in one chained launch */
     char *build_options;   /* appended to every build's options ("" for none) */
     sl_profile_slot *prof; /* entries by first launch since the last reset */
     size_t prof_count, prof_cap;

@@ -241,11 +241,11 @@ static size_t choose_chunk(const sluice_context *ctx, size_t bound)
     return want < lo ? lo : want > hi ? hi : want;
 }
 
-/* Queues one command of a launch in work-groups of `local` work-items; the
- * profile counts the launch at its first command (an ordered launch in the
- * interleaved layout is two). */
-static sluice_status enqueue(sluice_kernel *k, size_t global, int first, size_t local)
+/* Queues one command of a launch; the profile counts the launch at its
+ * first command (an ordered launch is two). */
+static sluice_status enqueue(sluice_kernel *k, size_t global, int first)
 {
+    size_t local = k->group;
     cl_event ev = NULL;
     cl_int err = clEnqueueNDRangeKernel(k->ctx->queue, k->cl, 1, NULL, &global, &local, 0, NULL,
                                         k->ctx->profile ? &ev : NULL);
@@ -403,26 +403,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
     sluice_status st = SLUICE_OK;
     L.interleave = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
     if (queued) {
-        if (L.ordered_mask && !L.interleave && ctx->chain) {
-            /* One chained launch (sluice.cl, mode 3): the chunks' ends,
-             * then a row of flags and the ticket, zeroed first. Its
-             * work-groups hold one work-item each: PoCL runs a group's
-             * work-items one after another, and in groups of 8 a group's
-             * first chunk waited for most of the group before it
-             * (bench/README.md, "Ordered outputs in one launch"). */
-            size_t rows = 32 - (size_t)__builtin_clz(L.ordered_mask);
-            st = sl_scratch_reserve(ctx, (rows + 1) * L.stride * sizeof(cl_uint));
-            if (st != SLUICE_OK)
-                return st;
-            const cl_uint zero = 0;
-            cl_int err = clEnqueueFillBuffer(ctx->queue, ctx->scratch, &zero, sizeof zero,
-                                             rows * L.stride * sizeof(cl_uint),
-                                             L.stride * sizeof(cl_uint), 0, NULL, NULL);
-            if (err != CL_SUCCESS)
-                return sl_cl_fail(ctx, err, "clearing the ordered outputs' flags");
-            L.mode = 3;
-            L.first_pass = 0;
-        } else if (L.ordered_mask) {
+        if (L.ordered_mask) {
             size_t rows = 0; /* rows up to the highest ordered slot */
             for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
                 if ((L.ordered_mask >> s) & 1u)
@@ -438,7 +419,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
             L.first_pass = 0;
             st = set_hidden(k, &L);
             if (st == SLUICE_OK)
-                st = enqueue(k, global, 1, k->group);
+                st = enqueue(k, global, 1);
             if (st == SLUICE_OK && !ctx->scan_kernel)
                 st = sl_embedded_cl_kernel(ctx, "runtime.cl", "sluice_scan_chunk_counts",
                                            &ctx->scan_kernel);
@@ -470,7 +451,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         if (st == SLUICE_OK)
             st = set_hidden(k, &L);
         if (st == SLUICE_OK)
-            st = enqueue(k, global, L.mode != 2, L.mode == 3 ? 1 : k->group);
+            st = enqueue(k, global, L.mode != 2);
         if (st != SLUICE_OK)
             return st;
     }

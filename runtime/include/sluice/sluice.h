@@ -185,8 +185,7 @@ sluice_status sluice_context_device(const sluice_context *ctx, sluice_device_inf
 sluice_status sluice_context_finish(sluice_context *ctx);
 
 /** Bytes of device scratch the context holds for ordered outputs (the
- *  per-chunk counts or ends, and the chained launches' flags); it grows to
- *  the largest launch and is kept. */
+ *  per-chunk counts); it grows to the largest launch and is kept. */
 size_t sluice_context_scratch_bytes(const sluice_context *ctx);
 
 /** Bytes of device scratch the context holds for the radix sort (records to
@@ -348,12 +347,8 @@ typedef struct sluice_counters sluice_counters;
 
 /** How a conditional output stream receives records. */
 typedef enum sluice_output_mode {
-    /** Records keep the order of the input records that emitted them. In the
-     *  contiguous layout (CPUs) the chunks are chained in one launch of
-     *  work-groups of one work-item: each chunk, once counted, waits for
-     *  where the chunk before it ends. In the interleaved layout (GPUs), or
-     *  with SLUICE_CHAIN=0 in the environment, it costs a counting launch
-     *  and a small scan before the writing launch. */
+    /** Records keep the order of the input records that emitted them. Costs a
+     *  counting launch and a small scan before the writing launch. */
     SLUICE_ORDERED = 0,
     /** Each chunk of input appends its records with one global atomic; order
      *  within a chunk is kept, order between chunks is not. */
