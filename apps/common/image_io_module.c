@@ -93,12 +93,18 @@ static void module_load(void)
     /* POSIX's way to turn dlsym's object pointer into a function pointer. */
     *(void **)&get = dlsym(h, SR_IMAGE_IO_MODULE_SYMBOL);
     const sr_image_io_module *m = get ? get() : NULL;
-    if (!m || m->abi != SR_IMAGE_IO_ABI) {
+    if (!m) {
         sr_set_error(module_error, sizeof module_error,
-                     "the image module %s is not one this program can use (%s %u, want %u): "
+                     "%s is not Sluice's image module (it has no " SR_IMAGE_IO_MODULE_SYMBOL ")",
+                     path);
+        dlclose(h);
+        return;
+    }
+    if (m->abi != SR_IMAGE_IO_ABI) {
+        sr_set_error(module_error, sizeof module_error,
+                     "the image module %s is of another Sluice (interface %u, this program's %u): "
                      "reinstall Sluice",
-                     path, m ? "interface" : "no " SR_IMAGE_IO_MODULE_SYMBOL, m ? m->abi : 0u,
-                     SR_IMAGE_IO_ABI);
+                     path, m->abi, SR_IMAGE_IO_ABI);
         dlclose(h);
         return;
     }
