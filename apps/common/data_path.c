@@ -32,13 +32,11 @@ int sr_exe_dir(char *out, size_t size)
     return 0;
 }
 
-int sr_data_dir(const char *sub, char *out, size_t size)
+int sr_exe_relative_dir(const char *way, char *out, size_t size)
 {
-    const char *data = SR_BIN_TO_DATA;
-    const char *sep = sub && *sub ? "/" : "";
     int n;
-    if (data[0] == '/') {
-        n = snprintf(out, size, "%s/sluice%s%s", data, sep, sub ? sub : "");
+    if (way[0] == '/') {
+        n = snprintf(out, size, "%s", way);
     } else {
         char exe[4096];
         if (sr_exe_dir(exe, sizeof exe) != 0)
@@ -46,16 +44,25 @@ int sr_data_dir(const char *sub, char *out, size_t size)
         /* The executable's folder has no symbolic links left (the kernel
          * resolved them), so each leading ".." may simply drop its last
          * component: error messages then show plain paths. */
-        while (strncmp(data, "../", 3) == 0 || strcmp(data, "..") == 0) {
+        while (strncmp(way, "../", 3) == 0 || strcmp(way, "..") == 0) {
             char *slash = strrchr(exe, '/');
             if (!slash || slash == exe)
                 break;
             *slash = 0;
-            data += data[2] ? 3 : 2;
+            way += way[2] ? 3 : 2;
         }
-        n = snprintf(out, size, "%s%s%s/sluice%s%s", exe, *data ? "/" : "", data, sep,
-                     sub ? sub : "");
+        n = snprintf(out, size, "%s%s%s", exe, *way ? "/" : "", way);
     }
+    return n < 0 || (size_t)n >= size ? -1 : 0;
+}
+
+int sr_data_dir(const char *sub, char *out, size_t size)
+{
+    char data[4096];
+    if (sr_exe_relative_dir(SR_BIN_TO_DATA, data, sizeof data) != 0)
+        return -1;
+    const char *sep = sub && *sub ? "/" : "";
+    int n = snprintf(out, size, "%s/sluice%s%s", data, sep, sub ? sub : "");
     return n < 0 || (size_t)n >= size ? -1 : 0;
 }
 

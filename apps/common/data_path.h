@@ -17,6 +17,12 @@ extern "C" {
  *  read (not Linux, no /proc) or does not fit in `size` bytes. */
 int sr_exe_dir(char *out, size_t size);
 
+/** Writes the folder `way` leads to from the running executable's folder
+ *  into `out`: `way` itself when absolute, else the executable's folder
+ *  followed by `way`, its leading ".." components taken off that folder.
+ *  Returns 0, or -1 as sr_exe_dir() does. Does not check that it exists. */
+int sr_exe_relative_dir(const char *way, char *out, size_t size);
+
 /** Writes the installed data folder `<datadir>/sluice/<sub>` as seen from
  *  the running executable (`<exe dir>/../share/sluice/<sub>` for the usual
  *  bindir and datadir; an absolute path when the build was configured with

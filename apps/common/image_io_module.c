@@ -60,16 +60,11 @@ static void module_load(void)
     if (env && *env) {
         snprintf(path, sizeof path, "%s", env);
     } else {
-        char exe[4096] = "", installed[4096];
+        char exe[4096], installed[4096];
         const char *dirs[2] = {NULL, NULL};
-        const char *rel = SR_BIN_TO_IMAGE_MODULE;
-        int have_exe = sr_exe_dir(exe, sizeof exe) == 0;
-        if (rel[0] == '/')
-            dirs[0] = rel;
-        else if (have_exe &&
-                 snprintf(installed, sizeof installed, "%s/%s", exe, rel) < (int)sizeof installed)
+        if (sr_exe_relative_dir(SR_BIN_TO_IMAGE_MODULE, installed, sizeof installed) == 0)
             dirs[0] = installed;
-        if (have_exe && exe_in_build_tree(exe))
+        if (sr_exe_dir(exe, sizeof exe) == 0 && exe_in_build_tree(exe))
             dirs[1] = SR_IMAGE_MODULE_BUILD_DIR;
         if (sr_find_file(SR_IMAGE_MODULE_NAME, dirs, 2, path, sizeof path, tried, sizeof tried) !=
             0) {
