@@ -1398,6 +1398,11 @@ int main(int argc, char **argv)
         }
         fclose(f);
     }
+    /* With SLUICE_PROFILE=1, the kernels' own times (every frame, warm-ups
+     * included): against the frames' wall time, what a frame spends outside
+     * its kernels. */
+    if (sluice_profile_enabled(ctx))
+        TRY(sluice_profile_print(ctx, stdout));
     sluice_context_destroy(ctx);
     return status;
 }

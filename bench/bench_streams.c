@@ -148,6 +148,8 @@ typedef struct bench {
     sluice_kernel *copy[3], *chain;    /* copy: per record, 16 per step, 4 per record */
     unsigned copy_turn, copy_kernels;  /* taken in turn: 2, or 3 in the GPU layout */
     sluice_stream *chain_a, *chain_b;
+    sluice_counters *trip; /* the round trip's counters */
+    int trip_counters;     /* 1: the round trip resets and reads them */
     float threshold;
     sluice_output_mode mode;
     uint32_t cells;
@@ -413,6 +415,27 @@ static void run_chain(void *a)
     }
 }
 
+/* 100 frames of the smallest round trips a renderer makes: one launch and
+ * a wait for it (trip_counters 0), or a counters reset, one launch and the
+ * counters read back (blocking; 1). Against the chain above, what waiting
+ * for the device, and a reset and a read, add to a frame. */
+static void run_round_trip(void *a)
+{
+    bench *b = a;
+    uint32_t c;
+    for (int i = 0; i < 100; ++i) {
+        if (b->trip_counters)
+            TRY(sluice_counters_reset(b->trip));
+        TRY(sluice_kernel_set_input(b->chain, 0, i % 2 ? b->chain_b : b->chain_a));
+        TRY(sluice_kernel_set_stream(b->chain, 1, i % 2 ? b->chain_a : b->chain_b, 1));
+        TRY(sluice_kernel_launch(b->chain));
+        if (b->trip_counters)
+            TRY(sluice_counters_read(b->trip, &c));
+        else
+            TRY(sluice_context_finish(ctx));
+    }
+}
+
 static void usage(FILE *f)
 {
     fprintf(f, "usage: bench_streams [--n N] [--reps R] [--out FILE] [--skip-bitonic]\n"
@@ -628,9 +651,15 @@ int main(int argc, char **argv)
     copy_run = NULL; /* the chain's small streams stay in cache, as in a renderer */
     double t_vendor = best_of(NULL, run_vendor_copy, &b, reps);
     double t_chain = best_of(NULL, run_chain, &b, reps);
+    const char *trip_name[] = {"trip"};
+    TRY(sluice_counters_create(ctx, 1, trip_name, &b.trip));
+    b.trip_counters = 0;
+    double t_sync = best_of(NULL, run_round_trip, &b, reps);
+    b.trip_counters = 1;
+    double t_trip = best_of(NULL, run_round_trip, &b, reps);
     uint32_t check[1024];
     TRY(sluice_stream_download(b.chain_a, check, 1024, NULL));
-    if (check[0] != b.keys[0] + 100u * (uint32_t)(reps + 1)) {
+    if (check[0] != b.keys[0] + 300u * (uint32_t)(reps + 1)) {
         fprintf(stderr, "bench_streams: the launch chain computed a wrong result\n");
         return 1;
     }
@@ -695,8 +724,13 @@ int main(int argc, char **argv)
         "qsort of %zu pairs: %.3f s; radix sort is %.1fx faster than qsort, %.2fx than C radix\n",
         n, t_qsort, t_qsort / t_radix, t_cradix / t_radix);
     printf("chain of 100 dependent launches: %.2f us per launch\n", per_launch_us);
+    double sync_us = t_sync / 100.0 * 1e6, trip_us = t_trip / 100.0 * 1e6;
+    printf("a launch and a wait for it: %.2f us; counters reset, a launch, the counters read: "
+           "%.2f us\n",
+           sync_us, trip_us);
     fprintf(f, "  ],\n  \"qsort_seconds\": %.6f,\n", t_qsort);
     fprintf(f, "  \"launch_chain_us_per_launch\": %.3f,\n", per_launch_us);
+    fprintf(f, "  \"launch_and_wait_us\": %.3f,\n  \"round_trip_us\": %.3f,\n", sync_us, trip_us);
     fprintf(f, "  \"targets\": {\n");
     const result *sp_o = &res[2], *sp_u = &res[3], *scan = &res[0];
     double frac_o = sp_o->bytes / sp_o->seconds / 1e9 / copy_gbs;
@@ -718,6 +752,7 @@ int main(int argc, char **argv)
     sluice_kernel_destroy(b.copy[1]);
     sluice_kernel_destroy(b.copy[2]);
     sluice_kernel_destroy(b.chain);
+    sluice_counters_destroy(b.trip);
     sluice_program_destroy(prog);
     sluice_stream *all[] = {b.s_in,    b.s_out,   b.s_out2,  b.s_keys,  b.s_vals,
                             b.s_flags, b.s_fin,   b.s_cells, b.s_route, b.s_over,

@@ -23,6 +23,20 @@
 #   gpu-raytrace  bench_raytrace on the GPU -> raytrace-h100.json
 #   scaling=LIST  bench/bench_scaling.py on PoCL, threads in LIST's order
 #                 (1 first) -> scaling-xeon16.json, the runs in scaling-runs.tar
+#   overhead=LIST bench_streams on 2^18 records on PoCL at each thread count
+#                 of LIST: what a dependent launch, a launch and the wait
+#                 for it, and a frame's round trip cost -> overhead-N.json
+#   rt-profile=LIST  bench_raytrace (bunny, bunny-close) on PoCL at each
+#                 thread count of LIST with SLUICE_PROFILE=1: the kernels'
+#                 own times against the frames' -> rt-profile-N.txt
+#   spread-ab=T   on PoCL at T threads, bench_raytrace (three scenes) twice
+#                 with and without the spread of the fused tracer's chunks
+#                 over the work-groups (SLUICE_NO_SPREAD=1), in turn; and
+#                 bench_raytrace at 1 thread for the speedup
+#                 -> spread-{on,off}-T-{rt1,rt2}.json, spread-1-rt.json
+#   rt-eff=T      on PoCL, bench_raytrace (three scenes) at 1 and T threads
+#                 in turn, twice: the speedup from runs side by side
+#                 -> eff-{1,T}-N.json
 #   libs-probe    which libraries of the image module's closure (the
 #                 sonames in .carry/oiio-libs.txt, one a line: `ldd` here) the
 #                 machine lacks -> oiio-missing.txt, so that a later call can
@@ -182,6 +196,52 @@ for phase in "$@"; do
         limited 400 python3 bench/bench_scaling.py --threads "$list" --keep /tmp/scaling \
             --out "$OUT/scaling-xeon16.json"
         (cd /tmp && tar -cf "$OUT/scaling-runs.tar" scaling)
+        ;;
+    overhead=*)
+        for t in $(echo "${phase#overhead=}" | tr , ' '); do
+            say "launch overhead on PoCL, $t threads"
+            POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t limited 60 taskset -c 0-$((t - 1)) \
+                build/bench/bench_streams --n 262144 --reps 5 --skip-bitonic \
+                --out "$OUT/overhead-$t.json" | grep -E "device:|chain|wait"
+        done
+        ;;
+    rt-profile=*)
+        for t in $(echo "${phase#rt-profile=}" | tr , ' '); do
+            say "bench_raytrace on PoCL with SLUICE_PROFILE=1, $t threads"
+            POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t SLUICE_PROFILE=1 limited 120 \
+                taskset -c 0-$((t - 1)) build/bench/bench_raytrace --skip-purcell --reps 2 \
+                --scene bunny --scene bunny-close >"$OUT/rt-profile-$t.txt" 2>&1
+            grep -E "^bunny|rt_trace_fused|total" "$OUT/rt-profile-$t.txt"
+        done
+        ;;
+    spread-ab=*)
+        t=${phase#spread-ab=}
+        rt() { # threads, spread (1 on, 0 off), output
+            POCL_MAX_PTHREAD_COUNT=$1 POCL_CPU_MAX_CU_COUNT=$1 SLUICE_NO_SPREAD=$((1 - $2)) \
+                limited 90 taskset -c 0-$(($1 - 1)) build/bench/bench_raytrace --skip-purcell \
+                --reps 2 --scene cornell --scene bunny --scene bunny-close --out "$3" |
+                grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
+        }
+        for r in 1 2; do
+            for sp in 1 0; do
+                say "bench_raytrace, $t threads, spread $sp, round $r"
+                rt "$t" $sp "$OUT/spread-$([ $sp = 1 ] && echo on || echo off)-$t-rt$r.json"
+            done
+        done
+        say "bench_raytrace, 1 thread"
+        rt 1 1 "$OUT/spread-1-rt.json"
+        ;;
+    rt-eff=*)
+        t=${phase#rt-eff=}
+        for r in 1 2; do
+            for n in 1 "$t"; do
+                say "bench_raytrace, $n threads, round $r"
+                POCL_MAX_PTHREAD_COUNT=$n POCL_CPU_MAX_CU_COUNT=$n limited 90 \
+                    taskset -c 0-$((n - 1)) build/bench/bench_raytrace --skip-purcell --reps 2 \
+                    --scene cornell --scene bunny --scene bunny-close --out "$OUT/eff-$n-$r.json" |
+                    grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
+            done
+        done
         ;;
     libs-probe)
         say "libraries of the OpenImageIO programs the machine lacks"

@@ -106,6 +106,7 @@ typedef struct sluice_launch_ {
     uint in_cap;       /* input capacity: a device length past it (overflow) voids the launch */
     uint n_map;        /* mapped outputs whose length the launch sets (n_fixed is SLUICE_NONE) */
     uint interleave;   /* 1: SLUICE_FOR_EACH interleaves its records within a work-group */
+    uint spread;       /* work-group g takes the chunks of group g * spread mod groups */
     uint out_var[SLUICE_MAX_OUTPUTS]; /* output lengths in the pool */
     uint out_cap[SLUICE_MAX_OUTPUTS]; /* output capacities (records) */
     uint map_var[SLUICE_MAX_OUTPUTS]; /* the lengths of those mapped outputs */
@@ -290,7 +291,19 @@ inline void sluice_range_places_(sluice_state_ *s)
  * them from the l-th (G the work-group size), so neighbouring work-items
  * read neighbouring records; in the block form every G-th block of
  * SLUICE_BLOCK records from the l-th. Ordered outputs are then placed in
- * group order (above). */
+ * group order (above).
+ *
+ * In the contiguous layout, for kernels marked uneven
+ * (sluice_kernel_set_uneven), work-group g takes the chunks of group
+ * g * spread mod G' (G' the number of groups; spread is coprime to it, so
+ * every group's chunks are taken once). PoCL hands its threads runs of
+ * consecutive work-groups, each a share of what is left (guided
+ * scheduling), so without the spread a thread's first run is a band of the
+ * stream: of a frame's rays, a band of rows, and the band holding the
+ * object costs several times the others. Spread by about the golden ratio,
+ * each run takes chunks from all over the stream and costs about its share
+ * (bench/README.md, "Uneven records spread over the threads"). A chunk's
+ * records, and the order of ordered outputs (by chunk), are as before. */
 inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
                           local uint *lds, const sluice_launch_ *L, int form)
 {
@@ -301,6 +314,10 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
             sluice_set_lengths_(vars, L, n);
     }
     uint id = (uint)get_global_id(0);
+    if (L->spread > 1u) /* the spread, above */
+        id = (uint)((ulong)get_group_id(0) * L->spread % get_num_groups(0)) *
+                 (uint)get_local_size(0) +
+             (uint)get_local_id(0);
     s->chunk_id = id;
     const int inter = L->interleave && form != SLUICE_FORM_RANGE_;
     if (inter) {

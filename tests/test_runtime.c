@@ -26,6 +26,11 @@ static const char *kernels_src =
     "        SLUICE_COUNT(1, x & 1u);\n"
     "    }\n"
     "}\n"
+    "__kernel void group_of(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i)\n"
+    "        out[i] = (uint)get_group_id(0);\n"
+    "}\n"
     "__kernel void dup(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
     "{\n"
     "    SLUICE_FOR_EACH(i) {\n"
@@ -235,10 +240,11 @@ static void launch_split3(sluice_context *ctx, sluice_kernel *k, sluice_stream *
 }
 
 static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pattern,
-                       sluice_output_mode mode)
+                       sluice_output_mode mode, int uneven)
 {
     sluice_kernel *k = NULL;
     CHECK_OK(ctx, sluice_kernel_create(p, "split3", &k));
+    CHECK_OK(ctx, sluice_kernel_set_uneven(k, uneven));
     sluice_counters *cn = NULL;
     const char *names[] = {"records", "odd"};
     CHECK_OK(ctx, sluice_counters_create(ctx, 2, names, &cn));
@@ -263,14 +269,14 @@ static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pat
     for (int j = 0; j < 3; ++j) {
         size_t len = 0;
         CHECK_OK(ctx, sluice_stream_download(s_out[j], got, n, &len));
-        CHECK(len == rn[j], "n=%zu pattern %d output %d: length %zu, want %zu", n, pattern, j, len,
-              rn[j]);
+        CHECK(len == rn[j], "n=%zu pattern %d uneven %d output %d: length %zu, want %zu", n,
+              pattern, uneven, j, len, rn[j]);
         if (mode == SLUICE_UNORDERED) {
             qsort(got, len, 4, cmp_u32);
             qsort(ref[j], rn[j], 4, cmp_u32);
         }
         CHECK(len == rn[j] && memcmp(got, ref[j], len * 4) == 0,
-              "n=%zu pattern %d output %d (%s): records differ", n, pattern, j,
+              "n=%zu pattern %d uneven %d output %d (%s): records differ", n, pattern, uneven, j,
               mode == SLUICE_ORDERED ? "ordered" : "unordered");
     }
     uint32_t cv[2];
@@ -287,6 +293,66 @@ static void test_split(sluice_context *ctx, sluice_program *p, size_t n, int pat
     sluice_kernel_destroy(k);
     free(in);
     free(got);
+}
+
+/* Which work-group took each record, with and without the uneven hint
+ * (sluice_kernel_set_uneven): without it the groups take the stream in
+ * order; with it, in the contiguous layout, each group still takes one run
+ * of consecutive records (its chunks), every record once, but the runs are
+ * spread over the groups (the CPU's guided scheduling hands out consecutive
+ * groups). */
+static void test_uneven(sluice_context *ctx, sluice_program *p, int contiguous)
+{
+    sluice_kernel *k = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "group_of", &k));
+    const size_t sizes[] = {1, 100, 3000, 65537, 300001};
+    for (size_t si = 0; si < sizeof sizes / sizeof *sizes; ++si) {
+        size_t n = sizes[si];
+        uint32_t *g = calloc(n, sizeof *g);
+        sluice_stream *in = NULL, *out = NULL;
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &in));
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &out));
+        CHECK_OK(ctx, sluice_stream_upload(in, g, n));
+        for (int uneven = 0; uneven < 2; ++uneven) {
+            CHECK_OK(ctx, sluice_kernel_set_uneven(k, uneven));
+            CHECK_OK(ctx, sluice_kernel_set_input(k, 0, in));
+            CHECK_OK(ctx, sluice_kernel_set_stream(k, 1, out, 1));
+            CHECK_OK(ctx, sluice_kernel_launch(k));
+            size_t got = 0;
+            CHECK_OK(ctx, sluice_stream_download(out, g, n, &got));
+            CHECK(got == n, "group_of n=%zu: %zu records", n, got);
+            size_t runs = 1, falls = 0, most = 0;
+            for (size_t i = 1; i < got; ++i) {
+                runs += g[i] != g[i - 1];
+                falls += g[i] < g[i - 1];
+            }
+            for (size_t i = 0; i < got; ++i)
+                most = g[i] > most ? g[i] : most;
+            /* one run per group: no group comes back after another */
+            char *seen = calloc(most + 1, 1);
+            int again = 0;
+            for (size_t i = 0; i < got; ++i) {
+                if (i && g[i] == g[i - 1])
+                    continue;
+                again |= seen[g[i]];
+                seen[g[i]] = 1;
+            }
+            free(seen);
+            CHECK(!again, "group_of n=%zu uneven %d: a group took two runs of records", n, uneven);
+            if (!uneven || !contiguous || runs < 3)
+                CHECK(falls == 0, "group_of n=%zu uneven %d: groups out of order (%zu falls)", n,
+                      uneven, falls);
+            else
+                CHECK(falls > 0, "group_of n=%zu: %zu groups in order despite the uneven hint", n,
+                      runs);
+        }
+        sluice_stream_destroy(in);
+        sluice_stream_destroy(out);
+        free(g);
+    }
+    CHECK(sluice_kernel_set_uneven(NULL, 1) == SLUICE_ERROR_INVALID_ARGUMENT,
+          "uneven: NULL kernel");
+    sluice_kernel_destroy(k);
 }
 
 /* Several records per input, appended after existing contents, and overflow. */
@@ -859,9 +925,9 @@ static void test_profile_rows(sluice_context *ctx, sluice_program *p)
 
     size_t count = sluice_profile_count(ctx);
     sluice_profile_entry e;
-    CHECK(count == 6,
-          "6 kernels ran (scale, split3, sluice_scan_chunk_counts, 3 scan passes), "
-          "the profile has %zu entries",
+    CHECK(count == 7,
+          "6 kernels ran (scale, split3, sluice_scan_chunk_counts, 3 scan passes) and split3's "
+          "count launch has a row of its own; the profile has %zu entries",
           count);
     for (size_t i = 0; i < count; ++i) {
         CHECK_OK(ctx, sluice_profile_get(ctx, i, &e));
@@ -877,6 +943,9 @@ static void test_profile_rows(sluice_context *ctx, sluice_program *p)
               e.bytes == 8u * N,
           "split3: %llu in, %llu out, %llu bytes", (unsigned long long)e.records_in,
           (unsigned long long)e.records_out, (unsigned long long)e.bytes);
+    CHECK(profile_find(ctx, "split3 count", &e) && e.launches == 1 && e.records_in == 0,
+          "split3 count: %llu launches, %llu records in (counted in split3's row)",
+          (unsigned long long)e.launches, (unsigned long long)e.records_in);
     CHECK(profile_find(ctx, "scan_sums_u32", &e) && e.launches == 2 && e.records_in == THIRDS + N &&
               e.bytes == 4u * (THIRDS + N),
           "scan_sums_u32: %llu launches, %llu records in (want %d), %llu bytes",
@@ -933,8 +1002,8 @@ static void test_profile(void)
 {
     sluice_context *ctx = check_context(1);
     sluice_program *p = program(ctx);
-    test_split(ctx, p, 4097, 0, SLUICE_UNORDERED);
-    test_split(ctx, p, 4097, 0, SLUICE_ORDERED);
+    test_split(ctx, p, 4097, 0, SLUICE_UNORDERED, 0);
+    test_split(ctx, p, 4097, 0, SLUICE_ORDERED, 0);
     sluice_profile_entry e;
     CHECK(sluice_profile_count(ctx) >= 1, "profile entries");
     CHECK_OK(ctx, sluice_profile_get(ctx, 0, &e));
@@ -1026,8 +1095,8 @@ static void test_chunk_env(void)
     sluice_context *c = check_context(0);
     sluice_program *p = program(c);
     for (int m = 0; m < 2; ++m) {
-        test_split(c, p, 1025, 0, m ? SLUICE_UNORDERED : SLUICE_ORDERED);
-        test_split(c, p, 65537, 3, m ? SLUICE_UNORDERED : SLUICE_ORDERED);
+        test_split(c, p, 1025, 0, m ? SLUICE_UNORDERED : SLUICE_ORDERED, m);
+        test_split(c, p, 65537, 3, m ? SLUICE_UNORDERED : SLUICE_ORDERED, m);
     }
     sluice_program_destroy(p);
     sluice_context_destroy(c);
@@ -1064,7 +1133,7 @@ static void test_layout(void)
         const size_t sizes[] = {0, 1, 255, 256, 257, 4099, 65537};
         for (size_t i = 0; i < sizeof sizes / sizeof *sizes; ++i)
             for (int m = 0; m < 2; ++m)
-                test_split(c, p, sizes[i], (int)(i % 4), m ? SLUICE_UNORDERED : SLUICE_ORDERED);
+                test_split(c, p, sizes[i], (int)(i % 4), m ? SLUICE_UNORDERED : SLUICE_ORDERED, m);
         test_multi_emit(c, p, SLUICE_ORDERED);
         test_multi_emit(c, p, SLUICE_UNORDERED);
         test_mapped_lengths(c, p);
@@ -1083,8 +1152,16 @@ int main(void)
     const size_t sizes[] = {0, 1, 7, 1023, 1025, 65535, 65537, 1u << 20};
     for (size_t i = 0; i < sizeof sizes / sizeof *sizes; ++i)
         for (int pattern = 0; pattern < 4; ++pattern)
-            for (int m = 0; m < 2; ++m)
-                test_split(ctx, p, sizes[i], pattern, m ? SLUICE_UNORDERED : SLUICE_ORDERED);
+            for (int m = 0; m < 4; ++m)
+                test_split(ctx, p, sizes[i], pattern, m & 1 ? SLUICE_UNORDERED : SLUICE_ORDERED,
+                           m >> 1);
+    sluice_device_info info;
+    CHECK_OK(ctx, sluice_context_device(ctx, &info));
+    const char *layout = getenv("SLUICE_LAYOUT");
+    const char *no_spread = getenv("SLUICE_NO_SPREAD");
+    int contiguous = (layout && *layout ? strcmp(layout, "contiguous") == 0 : info.is_cpu) &&
+                     !(no_spread && *no_spread && strcmp(no_spread, "0") != 0);
+    test_uneven(ctx, p, contiguous);
     test_multi_emit(ctx, p, SLUICE_ORDERED);
     test_multi_emit(ctx, p, SLUICE_UNORDERED);
     test_block_emit(ctx, p, "small_values");

@@ -323,6 +323,8 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
         st = sluice_kernel_create(t->program, "rt_route_setup", &t->k_route_setup);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(t->program, "rt_trace_fused", &t->k_fused);
+    if (st == SLUICE_OK) /* rays through the object cost many times those that miss it */
+        st = sluice_kernel_set_uneven(t->k_fused, 1);
     if (st != SLUICE_OK)
         sr_set_error(err, err_size, "ray tracer kernels: %s", sluice_context_error(t->ctx));
     return st;

@@ -167,6 +167,8 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
         opt.no_simd = 1;
     if (env_on("SLUICE_VERBOSE"))
         opt.verbose = 1;
+    if (env_on("SLUICE_NO_SPREAD"))
+        opt.no_spread = 1;
     if (!opt.build_options)
         opt.build_options = getenv("SLUICE_BUILD_OPTIONS");
     const char *chunk_env = getenv("SLUICE_CHUNK");
@@ -233,6 +235,7 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
         return SLUICE_ERROR_OUT_OF_MEMORY;
     }
     ctx->chunk = opt.chunk;
+    ctx->no_spread = opt.no_spread;
     ctx->layout = opt.layout != SLUICE_LAYOUT_AUTO ? (int)opt.layout
                   : ctx->info.is_cpu               ? SLUICE_LAYOUT_CONTIGUOUS
                                                    : SLUICE_LAYOUT_INTERLEAVED;

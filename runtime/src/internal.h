@@ -36,7 +36,7 @@ const char *sl_embedded_find(const char *name);
 /* Host mirror of sluice_launch_ in kernels/sluice.cl: same order, all cl_uint. */
 typedef struct sl_launch {
     cl_uint n_fixed, in_var, chunk, mode, first_pass, ordered_mask, out_mask;
-    cl_uint counter_var, n_counters, prof_var, stride, in_cap, n_map, interleave;
+    cl_uint counter_var, n_counters, prof_var, stride, in_cap, n_map, interleave, spread;
     cl_uint out_var[SLUICE_MAX_OUTPUTS];
     cl_uint out_cap[SLUICE_MAX_OUTPUTS];
     cl_uint map_var[SLUICE_MAX_OUTPUTS];
@@ -77,6 +77,7 @@ struct sluice_context {
      * SLUICE_LAYOUT_AUTO) and the work-group size they use. */
     int layout;
     size_t group;
+    int no_spread; /* sluice_context_options.no_spread */
     /* Variable pool. */
     cl_mem vars;
     unsigned char *var_used;
@@ -164,6 +165,7 @@ struct sluice_kernel {
     unsigned out_arg[SLUICE_MAX_OUTPUTS];
     sluice_output_mode out_mode[SLUICE_MAX_OUTPUTS];
     sluice_counters *counters;
+    int uneven;          /* sluice_kernel_set_uneven: chunks spread over the groups */
     size_t group;        /* work-group size of its launches (sl_kernel_group) */
     cl_uint prof_var;    /* 1 + SLUICE_MAX_OUTPUTS vars when profiling */
     size_t prof_entry;   /* valid while prof_epoch is the context's */

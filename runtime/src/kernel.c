@@ -215,6 +215,15 @@ sluice_status sluice_kernel_set_counters(sluice_kernel *k, sluice_counters *coun
     return SLUICE_OK;
 }
 
+sluice_status sluice_kernel_set_uneven(sluice_kernel *k, int uneven)
+{
+    if (!k)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    sl_clear_error(k->ctx);
+    k->uneven = uneven != 0;
+    return SLUICE_OK;
+}
+
 /* Records per work-item. On a CPU a work-item walking a long contiguous chunk
  * is as fast as plain C and needs few atomics; aim for about a thousand chunks
  * so both cores stay busy and the ordered scan stays small. Up to 16384
@@ -241,9 +250,35 @@ static size_t choose_chunk(const sluice_context *ctx, size_t bound)
     return want < lo ? lo : want > hi ? hi : want;
 }
 
-/* Queues one command of a launch; the profile counts the launch at its
- * first command (an ordered launch is two). */
-static sluice_status enqueue(sluice_kernel *k, size_t global, int first)
+static size_t gcd(size_t a, size_t b)
+{
+    while (b) {
+        size_t t = a % b;
+        a = b;
+        b = t;
+    }
+    return a;
+}
+
+/* The contiguous layout's spread of chunks over the work-groups
+ * (sluice_begin_ in sluice.cl): the integer nearest groups / phi, the golden
+ * ratio, that is coprime to groups, so that consecutive groups take chunks
+ * far apart and every chunk is taken once. */
+static cl_uint spread_of(size_t groups)
+{
+    if (groups < 3)
+        return 1;
+    size_t s = (size_t)((double)groups * 0.6180339887498949 + 0.5);
+    while (gcd(s, groups) != 1)
+        ++s;
+    return (cl_uint)s;
+}
+
+/* Queues one command of a launch. The profile counts an ordered launch's
+ * count command apart, as "<kernel> count", so that its two passes over the
+ * input can be told apart; the write command (or the only one) is the
+ * kernel's own entry. */
+static sluice_status enqueue(sluice_kernel *k, size_t global, int count_launch)
 {
     size_t local = k->group;
     cl_event ev = NULL;
@@ -254,8 +289,15 @@ static sluice_status enqueue(sluice_kernel *k, size_t global, int first)
         snprintf(what, sizeof what, "launching kernel %s", k->name);
         return sl_cl_fail(k->ctx, err, what);
     }
-    if (ev)
-        sl_profile_command(k->ctx, sl_profile_kernel_entry(k), ev, first, NULL);
+    if (ev) {
+        size_t entry = sl_profile_kernel_entry(k);
+        if (count_launch) {
+            char name[sizeof k->name + 8];
+            snprintf(name, sizeof name, "%s count", k->name);
+            entry = sl_profile_entry(k->ctx, name);
+        }
+        sl_profile_command(k->ctx, entry, ev, 1, NULL);
+    }
     return SLUICE_OK;
 }
 
@@ -384,6 +426,9 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
     size_t global = sl_round_up(chunks ? chunks : 1, k->group);
     L.chunk = (cl_uint)chunk;
     L.stride = (cl_uint)(global + 1);
+    L.spread = k->uneven && ctx->layout == SLUICE_LAYOUT_CONTIGUOUS && !ctx->no_spread
+                   ? spread_of(global / k->group)
+                   : 1;
     L.counter_var = k->counters ? k->counters->var : SL_NONE;
     L.n_counters = k->counters ? (cl_uint)k->counters->count : 0;
     L.prof_var = k->prof_var;
@@ -451,7 +496,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         if (st == SLUICE_OK)
             st = set_hidden(k, &L);
         if (st == SLUICE_OK)
-            st = enqueue(k, global, L.mode != 2);
+            st = enqueue(k, global, 0);
         if (st != SLUICE_OK)
             return st;
     }

@@ -156,6 +156,11 @@ typedef struct sluice_context_options {
      *  `verbose`) gives each kernel's registers and spills. Also set by
      *  SLUICE_BUILD_OPTIONS. */
     const char *build_options;
+    /** Non-zero: in the contiguous layout, work-group g takes the chunks of
+     *  group g also in the launches of kernels marked uneven
+     *  (sluice_kernel_set_uneven), e.g. to measure what the spread gives.
+     *  Also set by SLUICE_NO_SPREAD=1. */
+    int no_spread;
 } sluice_context_options;
 
 typedef struct sluice_context sluice_context;
@@ -385,6 +390,18 @@ sluice_status sluice_kernel_set_output(sluice_kernel *kernel, unsigned arg, unsi
  *  comes from input i). */
 sluice_status sluice_kernel_set_stream(sluice_kernel *kernel, unsigned arg, sluice_stream *stream,
                                        int map_output);
+
+/** Tells the runtime that the kernel's records cost very different amounts,
+ *  in runs along the stream (`uneven` non-zero; 0, the default, undoes it):
+ *  rays of a frame, for instance, where those through the object cost many
+ *  times those that miss it. In the contiguous layout (CPUs) each
+ *  work-group then takes chunks spread over the whole stream (sluice.cl,
+ *  sluice_begin_), so that no thread of the OpenCL implementation is handed
+ *  the expensive run alone; chunks, their records and the order of ordered
+ *  outputs stay as they are. Kernels whose records cost about the same
+ *  (copies, splits) are better without it. SLUICE_NO_SPREAD=1 (or the
+ *  context option no_spread) turns it off for every kernel, for measuring. */
+sluice_status sluice_kernel_set_uneven(sluice_kernel *kernel, int uneven);
 
 /** Sets a plain argument (a scalar, a vector or a struct) by value. */
 sluice_status sluice_kernel_set_arg(sluice_kernel *kernel, unsigned arg, size_t size,
