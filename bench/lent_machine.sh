@@ -152,7 +152,10 @@ for phase in "$@"; do
         say "NVIDIA's build logs (-cl-nv-verbose)"
         SLUICE_DEVICE=$DEV SLUICE_BUILD_OPTIONS=-cl-nv-verbose SLUICE_VERBOSE=1 limited 90 \
             build/bench/bench_streams --n 65536 --reps 1 --skip-bitonic >"$OUT/regs-h100.txt" 2>&1
-        grep -E "Compiling entry|Used [0-9]+ registers|spill" "$OUT/regs-h100.txt" | head -80
+        # one line a kernel: its name, stack frame and spills, registers
+        awk "/Compiling entry function/ {n = \$7} /stack frame/ {f = \$0; sub(/.*\\. +/, \"\", f)}
+            /Used [0-9]+ registers/ {print n, f, \$5, \"registers\"}" "$OUT/regs-h100.txt" |
+            sort -u | head -120
         ;;
     gpu-contig)
         say "bench_streams on the GPU, SLUICE_LAYOUT=contiguous"
