@@ -37,6 +37,11 @@
 #   rt-eff=T      on PoCL, bench_raytrace (three scenes) at 1 and T threads
 #                 in turn, twice: the speedup from runs side by side
 #                 -> eff-{1,T}-N.json
+#   rt-chunks=T:LIST  on PoCL at T threads, bench_raytrace (three scenes)
+#                 with SLUICE_CHUNK at each value of LIST (0: the runtime's
+#                 own choice), in turn: whether smaller chunks (more
+#                 work-groups) shorten the last thread's tail
+#                 -> rt-chunk-T-N.json
 #   libs-probe    which libraries of the image module's closure (the
 #                 sonames in .carry/oiio-libs.txt, one a line: `ldd` here) the
 #                 machine lacks -> oiio-missing.txt, so that a later call can
@@ -244,6 +249,18 @@ for phase in "$@"; do
                     --scene cornell --scene bunny --scene bunny-close --out "$OUT/eff-$n-$r.json" |
                     grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
             done
+        done
+        ;;
+    rt-chunks=*)
+        spec=${phase#rt-chunks=}
+        t=${spec%%:*}
+        for c in $(echo "${spec#*:}" | tr , ' '); do
+            say "bench_raytrace, $t threads, SLUICE_CHUNK=$c"
+            POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t limited 90 \
+                env $([ "$c" != 0 ] && echo SLUICE_CHUNK="$c") taskset -c 0-$((t - 1)) \
+                build/bench/bench_raytrace --skip-purcell --reps 2 --scene cornell --scene bunny \
+                --scene bunny-close --out "$OUT/rt-chunk-$t-$c.json" |
+                grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
         done
         ;;
     libs-probe)
