@@ -112,6 +112,16 @@ limited() {
     [ $rc -ne 0 ] && say "rc $rc: $*"
     return $rc
 }
+# bench_raytrace's three scenes on PoCL at T threads, its rates printed:
+# rt_scenes T OUT [VAR=VALUE...]
+rt_scenes() {
+    local t=$1 out=$2
+    shift 2
+    POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t limited 90 env "$@" \
+        taskset -c 0-$((t - 1)) build/bench/bench_raytrace --skip-purcell --reps 2 \
+        --scene cornell --scene bunny --scene bunny-close --out "$out" |
+        grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
+}
 
 say "setup in $ROOT"
 if [ -f .carry/bunny.obj ] && [ ! -e /usr/share/glmark2/models/bunny.obj ]; then
@@ -224,30 +234,22 @@ for phase in "$@"; do
         ;;
     spread-ab=*)
         t=${phase#spread-ab=}
-        rt() { # threads, spread (1 on, 0 off), output
-            POCL_MAX_PTHREAD_COUNT=$1 POCL_CPU_MAX_CU_COUNT=$1 SLUICE_NO_SPREAD=$((1 - $2)) \
-                limited 90 taskset -c 0-$(($1 - 1)) build/bench/bench_raytrace --skip-purcell \
-                --reps 2 --scene cornell --scene bunny --scene bunny-close --out "$3" |
-                grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
-        }
         for r in 1 2; do
             for sp in 1 0; do
                 say "bench_raytrace, $t threads, spread $sp, round $r"
-                rt "$t" $sp "$OUT/spread-$([ $sp = 1 ] && echo on || echo off)-$t-rt$r.json"
+                rt_scenes "$t" "$OUT/spread-$([ $sp = 1 ] && echo on || echo off)-$t-rt$r.json" \
+                    SLUICE_NO_SPREAD=$((1 - sp))
             done
         done
         say "bench_raytrace, 1 thread"
-        rt 1 1 "$OUT/spread-1-rt.json"
+        rt_scenes 1 "$OUT/spread-1-rt.json"
         ;;
     rt-eff=*)
         t=${phase#rt-eff=}
         for r in 1 2; do
             for n in 1 "$t"; do
                 say "bench_raytrace, $n threads, round $r"
-                POCL_MAX_PTHREAD_COUNT=$n POCL_CPU_MAX_CU_COUNT=$n limited 90 \
-                    taskset -c 0-$((n - 1)) build/bench/bench_raytrace --skip-purcell --reps 2 \
-                    --scene cornell --scene bunny --scene bunny-close --out "$OUT/eff-$n-$r.json" |
-                    grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
+                rt_scenes "$n" "$OUT/eff-$n-$r.json"
             done
         done
         ;;
@@ -256,11 +258,7 @@ for phase in "$@"; do
         t=${spec%%:*}
         for c in $(echo "${spec#*:}" | tr , ' '); do
             say "bench_raytrace, $t threads, SLUICE_CHUNK=$c"
-            POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t limited 90 \
-                env $([ "$c" != 0 ] && echo SLUICE_CHUNK="$c") taskset -c 0-$((t - 1)) \
-                build/bench/bench_raytrace --skip-purcell --reps 2 --scene cornell --scene bunny \
-                --scene bunny-close --out "$OUT/rt-chunk-$t-$c.json" |
-                grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
+            rt_scenes "$t" "$OUT/rt-chunk-$t-$c.json" $([ "$c" != 0 ] && echo SLUICE_CHUNK="$c")
         done
         ;;
     libs-probe)

@@ -321,13 +321,12 @@ static void test_uneven(sluice_context *ctx, sluice_program *p, int contiguous)
             size_t got = 0;
             CHECK_OK(ctx, sluice_stream_download(out, g, n, &got));
             CHECK(got == n, "group_of n=%zu: %zu records", n, got);
-            size_t runs = 1, falls = 0, most = 0;
+            size_t runs = 1, falls = 0, most = got ? g[0] : 0;
             for (size_t i = 1; i < got; ++i) {
                 runs += g[i] != g[i - 1];
                 falls += g[i] < g[i - 1];
-            }
-            for (size_t i = 0; i < got; ++i)
                 most = g[i] > most ? g[i] : most;
+            }
             /* one run per group: no group comes back after another */
             char *seen = calloc(most + 1, 1);
             int again = 0;

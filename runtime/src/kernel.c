@@ -289,14 +289,12 @@ static sluice_status enqueue(sluice_kernel *k, size_t global, int count_launch)
         snprintf(what, sizeof what, "launching kernel %s", k->name);
         return sl_cl_fail(k->ctx, err, what);
     }
-    if (ev) {
-        size_t entry = sl_profile_kernel_entry(k);
-        if (count_launch) {
-            char name[sizeof k->name + 8];
-            snprintf(name, sizeof name, "%s count", k->name);
-            entry = sl_profile_entry(k->ctx, name);
-        }
-        sl_profile_command(k->ctx, entry, ev, 1, NULL);
+    if (ev && count_launch) {
+        char name[sizeof k->name + 8];
+        snprintf(name, sizeof name, "%s count", k->name);
+        sl_profile_command(k->ctx, sl_profile_entry(k->ctx, name), ev, 1, NULL);
+    } else if (ev) {
+        sl_profile_command(k->ctx, sl_profile_kernel_entry(k), ev, 1, NULL);
     }
     return SLUICE_OK;
 }
