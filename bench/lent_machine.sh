@@ -13,6 +13,9 @@
 #                 the device, every launch) -> profile-h100.txt
 #   gpu-regs      NVIDIA's build logs with -cl-nv-verbose (registers, spills
 #                 and local memory per kernel) -> regs-h100.txt
+#   gpu-state-ab=R  bench_streams on the GPU with the work-items' state in
+#                 registers (the default) and without (-DSLUICE_NO_UNROLL_STATE),
+#                 in turn, R rounds -> state-{on,off}-N.json
 #   gpu-contig    the same in the CPU's layout -> streams-h100-contiguous.json
 #   gpu-chunks=LIST  the same in its own layout with SLUICE_CHUNK (records
 #                 per work-item) at each value of LIST -> streams-h100-chunk-N.json
@@ -171,6 +174,20 @@ for phase in "$@"; do
         awk "/Compiling entry function/ {n = \$7} /stack frame/ {f = \$0; sub(/.*\\. +/, \"\", f)}
             /Used [0-9]+ registers/ {print n, f, \$5, \"registers\"}" "$OUT/regs-h100.txt" |
             sort -u | head -120
+        ;;
+    gpu-state-ab=*)
+        # the work-items' state in registers (kernels/sluice.cl,
+        # SLUICE_UNROLL_STATE_) against it in memory, R rounds in turn
+        for r in $(seq 1 "${phase#gpu-state-ab=}"); do
+            for v in on off; do
+                opt=""
+                [ $v = off ] && opt=-DSLUICE_NO_UNROLL_STATE
+                say "bench_streams on the GPU, state in registers: $v (round $r)"
+                SLUICE_DEVICE=$DEV SLUICE_BUILD_OPTIONS=$opt limited 90 build/bench/bench_streams \
+                    --skip-bitonic --out "$OUT/state-$v-$r.json" |
+                    grep -E "^ *(copy|scan|reduce|split|compact|sort_radix|partition)"
+            done
+        done
         ;;
     gpu-contig)
         say "bench_streams on the GPU, SLUICE_LAYOUT=contiguous"

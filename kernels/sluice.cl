@@ -58,6 +58,27 @@
 
 #define SLUICE_MAX_OUTPUTS 8
 #define SLUICE_MAX_COUNTERS 8
+
+/* Off CPUs (the runtime defines SLUICE_UNROLL_STATE_ for devices other
+ * than CPUs) every helper below is inlined into the kernel and every loop
+ * over the outputs or counters unrolled, so that the state of a work-item
+ * (sluice_state_) lives in registers: a GPU compiler otherwise keeps it in
+ * memory, indexed at run time (NVIDIA's OpenCL showed a 176-byte stack
+ * frame, the state's size, in every stream kernel; clang for NVPTX shows
+ * the same frame, and none with these: tests/test_gpu_state.sh). PoCL
+ * inlines everything anyway; there the unrolled loops' branches between
+ * group emission's barriers made its compile time explode, and forced
+ * inlining alone made it 30% longer. For measuring, the build option
+ * -DSLUICE_NO_UNROLL_STATE (SLUICE_BUILD_OPTIONS) turns it off. */
+#if defined(SLUICE_UNROLL_STATE_) && !defined(SLUICE_NO_UNROLL_STATE)
+#define SLUICE_INLINE_ static inline __attribute__((always_inline))
+#define SLUICE_UNROLL_ _Pragma("unroll")
+#else
+#define SLUICE_INLINE_ inline
+#define SLUICE_UNROLL_
+#endif
+#define SLUICE_EACH_OUTPUT_(k) SLUICE_UNROLL_ for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+#define SLUICE_EACH_COUNTER_(c) SLUICE_UNROLL_ for (uint c = 0; c < SLUICE_MAX_COUNTERS; ++c)
 #define SLUICE_NONE 0xffffffffu
 
 /* Overflow is an error, never a truncation. A stream's length lives in
@@ -75,7 +96,7 @@
 
 /* The length of the stream whose length is vars[var] and capacity `cap`, as
  * a launch reads it: 0 when it overflowed (or is void). */
-inline uint sluice_stream_length_(global const uint *vars, uint var, uint cap)
+SLUICE_INLINE_ uint sluice_stream_length_(global const uint *vars, uint var, uint cap)
 {
     uint n = vars[var];
     return n <= cap ? n : 0u;
@@ -83,7 +104,7 @@ inline uint sluice_stream_length_(global const uint *vars, uint var, uint cap)
 
 /* Makes the stream whose length is vars[var] void, because it was written
  * from the overflowed stream whose length is vars[from]. */
-inline void sluice_void_(global uint *vars, uint var, uint from)
+SLUICE_INLINE_ void sluice_void_(global uint *vars, uint var, uint from)
 {
     vars[var + 1u] = vars[from] == SLUICE_VOID_ ? vars[from + 1u] : from;
     vars[var] = SLUICE_VOID_;
@@ -151,14 +172,14 @@ typedef struct sluice_state_ {
  * lengths to the input's `n`, or, when the input overflowed, makes the
  * outputs, the mapped outputs and the counters void. No other work-item
  * touches them: an overflowed input has no records to read. */
-inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint n)
+SLUICE_INLINE_ void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint n)
 {
     if (vars[L->in_var] <= L->in_cap) {
         for (uint m = 0; m < L->n_map; ++m)
             vars[L->map_var[m]] = n;
         return;
     }
-    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+    SLUICE_EACH_OUTPUT_ (k)
         if ((L->out_mask >> k) & 1u)
             sluice_void_(vars, L->out_var[k], L->in_var);
     for (uint m = 0; m < L->n_map; ++m)
@@ -191,7 +212,7 @@ inline void sluice_set_lengths_(global uint *vars, const sluice_launch_ *L, uint
  * is local memory for 8 (G + 16) words (G the group size). Every work-item
  * of the group must reach it. */
 #define SLUICE_SCAN_SEGMENTS_ 16u
-inline uint8 sluice_group_place_(local uint *t, uint8 x, local uint *at)
+SLUICE_INLINE_ uint8 sluice_group_place_(local uint *t, uint8 x, local uint *at)
 {
     uint l = (uint)get_local_id(0), g = (uint)get_local_size(0);
     uint segs = min(g, SLUICE_SCAN_SEGMENTS_), seg = (g + segs - 1u) / segs;
@@ -225,35 +246,35 @@ inline uint8 sluice_group_place_(local uint *t, uint8 x, local uint *at)
 /* sluice_group_place_ for the ordered outputs the group places, of the
  * counts cnt - from (from NULL: cnt; none when `none`, which leaves the
  * group's next places as they are): their places. */
-inline uint8 sluice_group_places_(sluice_state_ *s, const uint *from, uint none)
+SLUICE_INLINE_ uint8 sluice_group_places_(sluice_state_ *s, const uint *from, uint none)
 {
     uint8 x;
     uint *xs = (uint *)&x;
-    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+    SLUICE_EACH_OUTPUT_ (k)
         xs[k] = (s->omask >> k) & 1u && !none ? s->cnt[k] - (from ? from[k] : 0u) : 0u;
     return sluice_group_place_(s->lds + SLUICE_LDS_WORDS_, x, s->lds + SLUICE_MAX_OUTPUTS);
 }
 
 /* Into the write pass: where the group steps, into a step's count first;
  * its counts start from the marks in pos (the count pass's are dropped). */
-inline void sluice_enter_write_(sluice_state_ *s)
+SLUICE_INLINE_ void sluice_enter_write_(sluice_state_ *s)
 {
     s->pass = 1u;
     if (!s->stepped || s->begin >= s->uend)
         return;
     s->pass = 3u;
-    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+    SLUICE_EACH_OUTPUT_ (k)
         if ((s->omask >> k) & 1u)
             s->pos[k] = s->cnt[k] = 0u;
 }
 
 /* Between a step's count and its writing: each ordered output's places for
  * this step, after the group's earlier steps (sluice_group_place_). */
-inline void sluice_step_places_(sluice_state_ *s)
+SLUICE_INLINE_ void sluice_step_places_(sluice_state_ *s)
 {
     uint8 p = sluice_group_places_(s, s->pos, 0u);
     const uint *ps = (const uint *)&p;
-    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+    SLUICE_EACH_OUTPUT_ (k)
         if ((s->omask >> k) & 1u)
             s->pos[k] = ps[k];
 }
@@ -262,11 +283,11 @@ inline void sluice_step_places_(sluice_state_ *s)
  * records after those of the work-items before it in the group. A group
  * that steps takes part with nothing (its count pass counted for the
  * unordered outputs; its places come per step). */
-inline void sluice_range_places_(sluice_state_ *s)
+SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
 {
     uint8 p = sluice_group_places_(s, 0, s->stepped);
     const uint *ps = (const uint *)&p;
-    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+    SLUICE_EACH_OUTPUT_ (k) {
         if (!((s->omask >> k) & 1u) || s->stepped)
             continue;
         s->lim[k] = (uint)min((ulong)ps[k] + s->cnt[k], (ulong)s->lim[k]);
@@ -304,8 +325,8 @@ inline void sluice_range_places_(sluice_state_ *s)
  * each run takes chunks from all over the stream and costs about its share
  * (bench/README.md, "Uneven records spread over the threads"). A chunk's
  * records, and the order of ordered outputs (by chunk), are as before. */
-inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
-                          local uint *lds, const sluice_launch_ *L, int form)
+SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
+                                  local uint *lds, const sluice_launch_ *L, int form)
 {
     uint n = L->n_fixed;
     if (n == SLUICE_NONE) {
@@ -364,7 +385,7 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
                 s->pass = 1u;
         }
         if (get_local_id(0) == 0)
-            for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+            SLUICE_EACH_OUTPUT_ (k) {
                 lds[k] = 0u;
                 if ((s->omask >> k) & 1u) /* the group's next place */
                     lds[SLUICE_MAX_OUTPUTS + k] = scratch[k * L->stride + row];
@@ -372,7 +393,7 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
         barrier(CLK_LOCAL_MEM_FENCE);
     }
 #endif
-    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+    SLUICE_EACH_OUTPUT_ (k) {
         s->cnt[k] = 0;
         s->pos[k] = 0;
         s->lim[k] = 0;
@@ -386,7 +407,7 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
     }
     if (s->pass == 1u)
         sluice_enter_write_(s);
-    for (uint c = 0; c < SLUICE_MAX_COUNTERS; ++c)
+    SLUICE_EACH_COUNTER_ (c)
         s->ctr[c] = 0;
 }
 
@@ -394,8 +415,8 @@ inline void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint
  * it starts and sets *lim to its end, clamped to the capacity (records past
  * it are dropped; the length counts them, so the overflow is reported). A
  * void output stays void: nothing is appended to it. */
-inline uint sluice_reserve_(global uint *vars, const sluice_launch_ *L, uint k, uint count,
-                            uint *lim)
+SLUICE_INLINE_ uint sluice_reserve_(global uint *vars, const sluice_launch_ *L, uint k, uint count,
+                                    uint *lim)
 {
     uint p = 0u;
     *lim = 0u;
@@ -412,20 +433,20 @@ inline uint sluice_reserve_(global uint *vars, const sluice_launch_ *L, uint k, 
  * order) the group's counts of its ordered outputs go to the scratch row
  * of the group instead, and in a range's write launch each work-item takes
  * its places of them (sluice_range_places_). */
-inline void sluice_group_reserve_(sluice_state_ *s, global uint *vars, global uint *scratch,
-                                  const sluice_launch_ *L)
+SLUICE_INLINE_ void sluice_group_reserve_(sluice_state_ *s, global uint *vars, global uint *scratch,
+                                          const sluice_launch_ *L)
 {
 #ifdef SLUICE_GROUP_EMIT_
     local uint *lds = s->lds;
     /* the counts this adds up: a count launch's ordered outputs, or the
      * unordered outputs room is reserved for */
     const uint mine = L->mode == 1u ? L->ordered_mask : L->out_mask & ~s->omask;
-    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+    SLUICE_EACH_OUTPUT_ (k)
         if (((mine >> k) & 1u) && s->cnt[k])
             atomic_add(&lds[k], s->cnt[k]);
     barrier(CLK_LOCAL_MEM_FENCE);
     if (get_local_id(0) == 0) {
-        for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+        SLUICE_EACH_OUTPUT_ (k) {
             if (!((mine >> k) & 1u))
                 continue;
             if (L->mode == 1u) {
@@ -441,7 +462,7 @@ inline void sluice_group_reserve_(sluice_state_ *s, global uint *vars, global ui
     barrier(CLK_LOCAL_MEM_FENCE);
     if (L->mode == 1u)
         return;
-    for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+    SLUICE_EACH_OUTPUT_ (k) {
         if ((mine >> k) & 1u) {
             s->pos[k] = lds[SLUICE_MAX_OUTPUTS + k];
             s->lim[k] = lds[2 * SLUICE_MAX_OUTPUTS + k];
@@ -460,13 +481,13 @@ inline void sluice_group_reserve_(sluice_state_ *s, global uint *vars, global ui
 }
 
 /* Runs between the passes and after the last one. */
-inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scratch,
-                         const sluice_launch_ *L)
+SLUICE_INLINE_ void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scratch,
+                                 const sluice_launch_ *L)
 {
     if (s->pass == 0 && s->group) {
         sluice_group_reserve_(s, vars, scratch, L);
     } else if (s->pass == 0) {
-        for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k) {
+        SLUICE_EACH_OUTPUT_ (k) {
             if (!((L->out_mask >> k) & 1u))
                 continue;
             int ordered = (L->ordered_mask >> k) & 1u;
@@ -479,8 +500,8 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
             }
         }
     } else {
-        for (uint c = 0; c < L->n_counters; ++c)
-            if (s->ctr[c])
+        SLUICE_EACH_COUNTER_ (c)
+            if (c < L->n_counters && s->ctr[c])
                 atomic_add(&vars[L->counter_var + c], s->ctr[c]);
         if (L->prof_var != SLUICE_NONE) {
             if (s->end > s->begin) {
@@ -489,7 +510,7 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
                 uint last = s->begin + (steps - 1u) * s->step;
                 atomic_add(&vars[L->prof_var], (steps - 1u) * s->blk + min(s->blk, s->end - last));
             }
-            for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+            SLUICE_EACH_OUTPUT_ (k)
                 if (s->cnt[k])
                     atomic_add(&vars[L->prof_var + 1 + k], s->cnt[k]);
         }
@@ -519,7 +540,7 @@ inline void sluice_next_(sluice_state_ *s, global uint *vars, global uint *scrat
 /* The next record (or block) of the loop, from `id`. In group order the
  * group walks its tile in steps, each taken twice: a step's count, the
  * scan (sluice_step_places_), then the same records again to write them. */
-inline uint sluice_advance_(sluice_state_ *s, uint id)
+SLUICE_INLINE_ uint sluice_advance_(sluice_state_ *s, uint id)
 {
 #ifdef SLUICE_GROUP_EMIT_
     if (s->pass == 3u) {
@@ -531,7 +552,7 @@ inline uint sluice_advance_(sluice_state_ *s, uint id)
         uint next = id + s->step;
         next = next < id ? 0xffffffffu : next;
         if (next < s->uend) {
-            for (uint k = 0; k < SLUICE_MAX_OUTPUTS; ++k)
+            SLUICE_EACH_OUTPUT_ (k)
                 if ((s->omask >> k) & 1u)
                     s->pos[k] = s->cnt[k]; /* the next step counts from here */
             s->pass = 3u;
@@ -597,7 +618,7 @@ inline uint sluice_advance_(sluice_state_ *s, uint id)
 /* In the count passes counts c records of output `slot` and returns 1: in
  * pass 0 every output's, in a step's count (pass 3, group order) only
  * those of the ordered outputs the group places. */
-inline int sluice_counting_(sluice_state_ *s, uint slot, uint c)
+SLUICE_INLINE_ int sluice_counting_(sluice_state_ *s, uint slot, uint c)
 {
 #ifdef SLUICE_GROUP_EMIT_
     if (s->pass == 1u)
@@ -619,7 +640,7 @@ inline int sluice_counting_(sluice_state_ *s, uint slot, uint c)
  * false, or in the count pass, it is a slot that a later record of the same
  * chunk overwrites or the stream's spare record past its capacity. Use this
  * for records written field by field. */
-inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
+SLUICE_INLINE_ uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
 {
     if (sluice_counting_(s, slot, c))
         return cap;
@@ -662,7 +683,7 @@ inline uint sluice_emit_index_(sluice_state_ *s, uint slot, uint c, uint cap)
  * conditional output `slot` (records of 32-bit words in `buf`), in lane
  * order, taking their places at once: in group emission one local atomic
  * for the 4 records instead of one each. */
-inline void sluice_emit4_(sluice_state_ *s, uint slot, global uint *buf, uint4 x, uint m)
+SLUICE_INLINE_ void sluice_emit4_(sluice_state_ *s, uint slot, global uint *buf, uint4 x, uint m)
 {
     m &= 15u;
     uint k = popcount(m);
@@ -696,7 +717,7 @@ inline void sluice_emit4_(sluice_state_ *s, uint slot, global uint *buf, uint4 x
 #define SLUICE_EMIT4(slot, buf, x, m) sluice_emit4_(&sluice_s_, (slot), (buf), (x), (m))
 
 /* The 4-bit mask of an int4 comparison's true lanes (-1), for SLUICE_EMIT4. */
-inline uint sluice_mask4(int4 c)
+SLUICE_INLINE_ uint sluice_mask4(int4 c)
 {
     return ((uint)c.s0 & 1u) | ((uint)c.s1 & 2u) | ((uint)c.s2 & 4u) | ((uint)c.s3 & 8u);
 }
@@ -788,7 +809,7 @@ constant uint sluice_pack8_[256] = {
 typedef uint8 sluice_uint8_unaligned_ __attribute__((aligned(4)));
 
 /* Packs the lanes of `x` selected by the 8-bit mask `m` to the front. */
-inline uint8 sluice_pack8_lanes_(uint8 x, uint m)
+SLUICE_INLINE_ uint8 sluice_pack8_lanes_(uint8 x, uint m)
 {
     uint8 idx = ((uint8)sluice_pack8_[m] >> (uint8)(0u, 4u, 8u, 12u, 16u, 20u, 24u, 28u)) & 7u;
     return as_uint8(__builtin_ia32_permvarsi256(as_int8(x), as_int8(idx)));
@@ -950,7 +971,7 @@ typedef float16 sluice_float16_unaligned_ __attribute__((aligned(4)));
  * a vector comparison such as `x < (float16)t`. */
 #define sluice_mask16(c) sluice_mask16_((private int16[1]){(c)})
 
-inline ushort sluice_mask16_(const int16 *c)
+SLUICE_INLINE_ ushort sluice_mask16_(const int16 *c)
 {
 #if defined(SLUICE_AVX512_)
     return __builtin_ia32_cmpd512_mask(*c, (int16)0, 4 /* not equal */, (ushort)0xffff);
@@ -973,7 +994,7 @@ inline ushort sluice_mask16_(const int16 *c)
 /* The mask of the non-zero lanes of `c` (an int8; bit k for lane k). */
 #define sluice_mask8(c) sluice_mask8_((private int8[1]){(c)})
 
-inline uchar sluice_mask8_(const int8 *c)
+SLUICE_INLINE_ uchar sluice_mask8_(const int8 *c)
 {
 #if defined(SLUICE_AVX512_) || defined(SLUICE_AVX2_)
     /* a non-zero lane becomes -1 (sign bit set); vmovmskps gathers 8 signs */
@@ -989,7 +1010,8 @@ inline uchar sluice_mask8_(const int8 *c)
 /* Writes the lanes of *x selected by m to buf[p], buf[p + 1], ..., those at
  * or past lim dropped (an overflowing output). The copy keeps the
  * lane-by-lane reads off the caller's vector. */
-inline void sluice_emit_lanes_(global uint *buf, const uint16 *x, ushort m, uint p, uint lim)
+SLUICE_INLINE_ void sluice_emit_lanes_(global uint *buf, const uint16 *x, ushort m, uint p,
+                                       uint lim)
 {
     uint16 lanes = *x;
     const uint *v = (const uint *)&lanes;
@@ -1002,7 +1024,8 @@ inline void sluice_emit_lanes_(global uint *buf, const uint16 *x, ushort m, uint
     }
 }
 
-inline void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const uint16 *x, ushort m)
+SLUICE_INLINE_ void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf, const uint16 *x,
+                                   ushort m)
 {
     uint k = popcount((uint)m);
     if (sluice_counting_(s, slot, k))

@@ -262,17 +262,18 @@ sluice_status sluice_program_build(sluice_program *p)
     cl_program prog = clCreateProgramWithSource(ctx->cl, 1, &src, NULL, &err);
     if (!prog)
         return sl_cl_fail(ctx, err, "clCreateProgramWithSource");
-    size_t ol = strlen(p->options) + strlen(ctx->build_options) + 64;
+    size_t ol = strlen(p->options) + strlen(ctx->build_options) + 128;
     char *opts = malloc(ol);
     if (!opts) {
         clReleaseProgram(prog);
         return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
     }
     /* the interleaved layout's stream kernels reserve room per work-group
-     * (group emission, kernels/sluice.cl) */
-    snprintf(opts, ol, "-cl-std=CL1.2%s%s %s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "",
-             ctx->layout == SLUICE_LAYOUT_INTERLEAVED ? " -DSLUICE_GROUP_EMIT_" : "", p->options,
-             ctx->build_options);
+     * (group emission, kernels/sluice.cl); off CPUs the loops over a
+     * work-item's outputs are unrolled, to keep its state in registers */
+    snprintf(opts, ol, "-cl-std=CL1.2%s%s%s %s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "",
+             ctx->layout == SLUICE_LAYOUT_INTERLEAVED ? " -DSLUICE_GROUP_EMIT_" : "",
+             ctx->info.is_cpu ? "" : " -DSLUICE_UNROLL_STATE_", p->options, ctx->build_options);
     stderr_capture capture;
     capture_begin(&capture);
     err = clBuildProgram(prog, 1, &ctx->device, opts, NULL, NULL);
