@@ -16,6 +16,10 @@
 #   gpu-state-ab=R  bench_streams on the GPU with the work-items' state in
 #                 registers (the default) and without (-DSLUICE_NO_UNROLL_STATE),
 #                 in turn, R rounds -> state-{on,off}-N.json
+#   gpu-rt-ab=R   bench_raytrace on the GPU with the stream tracer's kernels
+#                 one ray per work-item (the default there) and in blocks of
+#                 16 rays (-DRT_NO_PER_RAY), in turn, R rounds
+#                 -> rt-per-ray-{on,off}-N.json
 #   gpu-contig    the same in the CPU's layout -> streams-h100-contiguous.json
 #   gpu-chunks=LIST  the same in its own layout with SLUICE_CHUNK (records
 #                 per work-item) at each value of LIST -> streams-h100-chunk-N.json
@@ -186,6 +190,20 @@ for phase in "$@"; do
                 SLUICE_DEVICE=$DEV SLUICE_BUILD_OPTIONS=$opt limited 90 build/bench/bench_streams \
                     --skip-bitonic --out "$OUT/state-$v-$r.json" |
                     grep -E "^ *(copy|scan|reduce|split|compact|sort_radix|partition)"
+            done
+        done
+        ;;
+    gpu-rt-ab=*)
+        # the stream tracer's kernels one ray per work-item (RT_PER_RAY, the
+        # default on GPUs) against blocks of 16 rays (-DRT_NO_PER_RAY)
+        for r in $(seq 1 "${phase#gpu-rt-ab=}"); do
+            for v in on off; do
+                opt=""
+                [ $v = off ] && opt=-DRT_NO_PER_RAY
+                say "bench_raytrace on the GPU, one ray per work-item: $v (round $r)"
+                SLUICE_DEVICE=$DEV SLUICE_BUILD_OPTIONS=$opt limited 150 build/bench/bench_raytrace \
+                    --skip-purcell --reps 2 --out "$OUT/rt-per-ray-$v-$r.json" |
+                    grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
             done
         done
         ;;

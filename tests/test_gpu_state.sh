@@ -7,6 +7,10 @@
 # every stream kernel before they were unrolled; clang shows the same frame
 # without SLUICE_UNROLL_STATE_. No GPU is needed.
 #
+# The ray tracer's stream kernels, built as for a GPU (RT_PER_RAY:
+# kernels/render/rt_stream.cl), the same; its fused kernel is left out (its
+# packet's arrays are per work-item by design: 80 bytes).
+#
 # Usage: test_gpu_state.sh KERNELS_DIR EXAMPLES_DIR CLANG
 # Exits 77 (skipped) where CLANG cannot build for NVPTX.
 set -u
@@ -82,32 +86,58 @@ EOF
 
 failed=0
 checked=0
-for src in "$tmp/forms.cl" "$kernels"/compact.cl "$kernels"/scan.cl "$kernels"/reduce.cl \
-    "$kernels"/route.cl "$kernels"/cell_index.cl "$kernels"/sort_bitonic.cl \
-    "$kernels"/runtime.cl "$examples"/split_sign/split_sign.cl "$examples"/bounce/bounce.cl; do
-    name=$(basename "$src" .cl)
-    if ! build "$src" "$tmp/$name.ptx" -DSLUICE_GROUP_EMIT_ -DSLUICE_UNROLL_STATE_; then
-        echo "FAIL: $src does not build for NVPTX:"
-        head -20 "$tmp/err"
-        failed=1
-        continue
-    fi
-    # the entries, each with its frame size or none
-    awk -v file="$name" '
+# check NAME: every entry of $tmp/NAME.ptx but those matching $skip, without
+# a stack frame
+check() {
+    awk -v file="$1" '
         /^\.entry/ { if (entry != "") print file, entry, depot; entry = $2; sub(/\(.*/, "", entry); depot = 0 }
         /__local_depot[0-9]*\[/ { d = $0; sub(/.*\[/, "", d); sub(/\].*/, "", d); depot = d }
-        END { if (entry != "") print file, entry, depot }' "$tmp/$name.ptx" >"$tmp/$name.frames"
+        END { if (entry != "") print file, entry, depot }' "$tmp/$1.ptx" >"$tmp/$1.frames"
     while read -r file entry depot; do
+        if [ -n "$skip" ] && echo "$entry" | grep -qE "$skip"; then
+            continue
+        fi
         checked=$((checked + 1))
         if [ "$depot" != 0 ]; then
             echo "FAIL: $file: $entry has a $depot-byte stack frame on NVPTX"
             failed=1
         fi
-    done <"$tmp/$name.frames"
-done
+    done <"$tmp/$1.frames"
+}
+gpu="-DSLUICE_GROUP_EMIT_ -DSLUICE_UNROLL_STATE_"
+skip=""
 # sort_radix.cl is left out: its kernels are the CPU's, a work-item walking
 # a whole chunk with private histograms by design
-if [ "$checked" -lt 40 ]; then
+for src in "$tmp/forms.cl" "$kernels"/compact.cl "$kernels"/scan.cl "$kernels"/reduce.cl \
+    "$kernels"/route.cl "$kernels"/cell_index.cl "$kernels"/sort_bitonic.cl \
+    "$kernels"/runtime.cl "$examples"/split_sign/split_sign.cl "$examples"/bounce/bounce.cl; do
+    name=$(basename "$src" .cl)
+    # shellcheck disable=SC2086
+    if ! build "$src" "$tmp/$name.ptx" $gpu; then
+        echo "FAIL: $src does not build for NVPTX:"
+        head -20 "$tmp/err"
+        failed=1
+        continue
+    fi
+    check "$name"
+done
+# the ray tracer's program as apps/render/tracer.c puts it together
+render=$kernels/render
+for f in rt_types.h triangle.cl rt_trace.cl rt_lanes.cl rt_stream.cl rt_fused.cl; do
+    cat "$render/$f"
+    echo
+done >"$tmp/tracer.cl"
+# shellcheck disable=SC2086
+if build "$tmp/tracer.cl" "$tmp/tracer.ptx" $gpu -I"$render" -D__OPENCL_VERSION__=120 \
+    -DRT_UNROLL_STEPS=8 -DRT_UNROLL_TESTS=256 -DRT_PER_RAY; then
+    skip='^rt_trace_fused$'
+    check tracer
+else
+    echo "FAIL: the ray tracer's kernels do not build for NVPTX:"
+    head -20 "$tmp/err"
+    failed=1
+fi
+if [ "$checked" -lt 60 ]; then
     echo "FAIL: only $checked kernels found in the PTX"
     exit 1
 fi

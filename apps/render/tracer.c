@@ -290,9 +290,13 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     else if (t->walks_ahead)
         snprintf(walk, sizeof walk, " -DRT_FUSED_WALK=%d%s", RT_WALK_VOXELS,
                  t->slices ? slices : "");
-    snprintf(opts, sizeof opts, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s",
+    /* off CPUs the stream kernels take one ray per work-item (rt_stream.cl) */
+    sluice_device_info info;
+    int cpu = sluice_context_device(t->ctx, &info) != SLUICE_OK || info.is_cpu;
+    snprintf(opts, sizeof opts, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s%s",
              t->opt.unroll_steps, t->opt.unroll_tests,
-             t->opt.intersector == RT_ISECT_WATERTIGHT ? " -DRT_WATERTIGHT" : "", walk);
+             t->opt.intersector == RT_ISECT_WATERTIGHT ? " -DRT_WATERTIGHT" : "", walk,
+             cpu ? "" : " -DRT_PER_RAY");
     /* what the scene lets the tracer leave out */
     t->skipped[0] = '\0';
     sr_skipped_add(t->skipped, sizeof t->skipped, 1,

@@ -33,7 +33,19 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-/* Blocks of 16 rays run in lanes as rt_packet (rt_lanes.cl). */
+/* Blocks of 16 rays run in lanes as rt_packet (rt_lanes.cl): a CPU's
+ * vector units. On a GPU the lanes are the work-items, and a work-item's
+ * 16-lane vectors live in memory (clang for NVPTX gave rt_setup,
+ * rt_traverse and rt_intersect stack frames of 1.8-2.7 KB, and none
+ * without them), so the tracer builds for devices other than CPUs with
+ * RT_PER_RAY: every ray goes through the one-ray code that CPUs use for a
+ * chunk's last rays. -DRT_NO_PER_RAY (SLUICE_BUILD_OPTIONS) keeps the
+ * blocks there, for measuring. */
+#if defined(RT_PER_RAY) && !defined(RT_NO_PER_RAY)
+#define RT_BLOCKS16 0
+#else
+#define RT_BLOCKS16 1
+#endif
 
 /* The rays ids and their walk state (rt_walk: cx, cy, cz, pos), gathered. */
 inline void rt_walk16_load(global const rt_ray *rays, global const rt_walk *walk, uint16 ids,
@@ -243,7 +255,7 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
             (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
         uint i = lo, visited_all = 0u, done_all = 0u, entered_all = 0u;
         uint n = SLUICE_LENGTH;
-        for (; i + 16u <= hi; i += 16u) {
+        for (; RT_BLOCKS16 && i + 16u <= hi; i += 16u) {
             /* the next block's rays, one line each (SLUICE_PREFETCH), past
              * the chunk's end too (rt_trace_fused) */
             for (uint q = i + 16u; q < min(i + 32u, n); ++q)
@@ -337,7 +349,7 @@ __kernel void rt_traverse(SLUICE_PARAMS, global const uint *ids, global uint *co
 {
     SLUICE_FOR_EACH_RANGE (lo, hi) {
         uint i = lo, visited_all = 0u, done_all = 0u, n = SLUICE_LENGTH;
-        for (; i + 16u <= hi; i += 16u) {
+        for (; RT_BLOCKS16 && i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
             uint id[16];
             vstore16(idv, 0, id);
@@ -477,7 +489,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
     SLUICE_FOR_EACH_RANGE (lo, hi) {
         uint i = lo, tested_all = 0u, visited_all = 0u, done_all = 0u, n = SLUICE_LENGTH;
 #ifndef RT_WATERTIGHT
-        for (; i + 16u <= hi; i += 16u) {
+        for (; RT_BLOCKS16 && i + 16u <= hi; i += 16u) {
             uint16 idv = vload16(0, ids + i);
             uint id[16];
             vstore16(idv, 0, id);
