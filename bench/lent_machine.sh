@@ -119,6 +119,23 @@ limited() {
     [ $rc -ne 0 ] && say "rc $rc: $*"
     return $rc
 }
+# A benchmark on the GPU as built (SLUICE_BUILD_OPTIONS empty: "on") and
+# with OFF_OPTION ("off"), in turn, R rounds, each run within LIMIT seconds,
+# writing OUT/NAME-{on,off}-N.json; the lines matching PATTERN printed:
+# gpu_ab R OFF_OPTION NAME LIMIT PATTERN CMD...
+gpu_ab() {
+    local rounds=$1 off=$2 name=$3 lim=$4 pattern=$5 r v opt
+    shift 5
+    for r in $(seq 1 "$rounds"); do
+        for v in on off; do
+            opt=""
+            [ $v = off ] && opt=$off
+            say "$name on the GPU: $v (round $r)"
+            SLUICE_DEVICE=$DEV SLUICE_BUILD_OPTIONS=$opt limited "$lim" "$@" \
+                --out "$OUT/$name-$v-$r.json" | grep -E "$pattern"
+        done
+    done
+}
 # bench_raytrace's three scenes on PoCL at T threads, its rates printed:
 # rt_scenes T OUT [VAR=VALUE...]
 rt_scenes() {
@@ -181,31 +198,17 @@ for phase in "$@"; do
         ;;
     gpu-state-ab=*)
         # the work-items' state in registers (kernels/sluice.cl,
-        # SLUICE_UNROLL_STATE_) against it in memory, R rounds in turn
-        for r in $(seq 1 "${phase#gpu-state-ab=}"); do
-            for v in on off; do
-                opt=""
-                [ $v = off ] && opt=-DSLUICE_NO_UNROLL_STATE
-                say "bench_streams on the GPU, state in registers: $v (round $r)"
-                SLUICE_DEVICE=$DEV SLUICE_BUILD_OPTIONS=$opt limited 90 build/bench/bench_streams \
-                    --skip-bitonic --out "$OUT/state-$v-$r.json" |
-                    grep -E "^ *(copy|scan|reduce|split|compact|sort_radix|partition)"
-            done
-        done
+        # SLUICE_UNROLL_STATE_) against it in memory
+        gpu_ab "${phase#gpu-state-ab=}" -DSLUICE_NO_UNROLL_STATE state 90 \
+            "^ *(copy|scan|reduce|split|compact|sort_radix|partition)" \
+            build/bench/bench_streams --skip-bitonic
         ;;
     gpu-rt-ab=*)
         # the stream tracer's kernels one ray per work-item (RT_PER_RAY, the
-        # default on GPUs) against blocks of 16 rays (-DRT_NO_PER_RAY)
-        for r in $(seq 1 "${phase#gpu-rt-ab=}"); do
-            for v in on off; do
-                opt=""
-                [ $v = off ] && opt=-DRT_NO_PER_RAY
-                say "bench_raytrace on the GPU, one ray per work-item: $v (round $r)"
-                SLUICE_DEVICE=$DEV SLUICE_BUILD_OPTIONS=$opt limited 150 build/bench/bench_raytrace \
-                    --skip-purcell --reps 2 --out "$OUT/rt-per-ray-$v-$r.json" |
-                    grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
-            done
-        done
+        # default on GPUs) against blocks of 16 rays
+        gpu_ab "${phase#gpu-rt-ab=}" -DRT_NO_PER_RAY rt-per-ray 150 \
+            "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]" \
+            build/bench/bench_raytrace --skip-purcell --reps 2
         ;;
     gpu-contig)
         say "bench_streams on the GPU, SLUICE_LAYOUT=contiguous"
