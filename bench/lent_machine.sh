@@ -54,6 +54,9 @@
 #                 machine lacks -> oiio-missing.txt, so that a later call can
 #                 carry just those and run the whole suite there
 #
+# RT_SIZE (default 512) is the image side of the PoCL phases' ray tracer
+# runs (spread-ab, rt-eff, rt-chunks): at 16 threads a 512x512 frame is
+# short enough that a launch's fixed cost is a tenth of it.
 # LENT_DEVICE (default NVIDIA) names the device of the gpu phases, so that
 # the script can be tried on any machine first (LENT_DEVICE=pthread).
 # What it expects: the build in ./build (made on Debian 12, with rpaths
@@ -139,11 +142,12 @@ gpu_ab() {
 # bench_raytrace's three scenes on PoCL at T threads, its rates printed:
 # rt_scenes T OUT [VAR=VALUE...]
 rt_scenes() {
-    local t=$1 out=$2
+    local t=$1 out=$2 size=${RT_SIZE:-512}
     shift 2
-    POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t limited 90 env "$@" \
+    POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t \
+        limited $((90 * size / 512 * size / 512)) env "$@" \
         taskset -c 0-$((t - 1)) build/bench/bench_raytrace --skip-purcell --reps 2 \
-        --scene cornell --scene bunny --scene bunny-close --out "$out" |
+        --size "$size" --scene cornell --scene bunny --scene bunny-close --out "$out" |
         grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
 }
 
