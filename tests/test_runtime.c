@@ -94,6 +94,11 @@ static const char *kernels_src =
     "        SLUICE_EMIT_IF(0, out, x, x > 1u);\n"
     "        SLUICE_COUNT(0, x > 1u);\n"
     "    }\n"
+    "}\n"
+    "__kernel void add_up(SLUICE_PARAMS, global const uint *in)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i)\n"
+    "        SLUICE_COUNT(0, in[i]);\n"
     "}\n";
 
 static sluice_program *program(sluice_context *ctx)
@@ -540,6 +545,61 @@ static unsigned stop_at_three(void *user, unsigned pass, const uint32_t *values,
     return pass >= 3 ? SLUICE_LOOP_STOP : pass;
 }
 
+/* sluice_counters_read_restart: a read gives the counts since the last
+ * reset or restart, modulo 2^32 (a counter that wraps on the device still
+ * reads right). */
+static void launch_add_up(sluice_context *ctx, sluice_kernel *k, sluice_stream *s,
+                          const uint32_t *in, size_t n)
+{
+    CHECK_OK(ctx, sluice_stream_upload(s, in, n));
+    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, s));
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+}
+
+static void test_counters_restart(sluice_context *ctx, sluice_program *p)
+{
+    sluice_kernel *k = NULL;
+    sluice_stream *s = NULL;
+    sluice_counters *cn = NULL;
+    CHECK_OK(ctx, sluice_kernel_create(p, "add_up", &k));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, 4, &s));
+    CHECK_OK(ctx, sluice_counters_create(ctx, 1, NULL, &cn));
+    CHECK_OK(ctx, sluice_kernel_set_counters(k, cn));
+    const uint32_t a[2] = {5u, 7u}, big = 0xfffffff0u, small = 0x20u;
+    uint32_t v = 1;
+    launch_add_up(ctx, k, s, a, 2);
+    CHECK_OK(ctx, sluice_counters_read(cn, &v));
+    CHECK(v == 12u, "read %u, want 12", v);
+    CHECK_OK(ctx, sluice_counters_read(cn, &v));
+    CHECK(v == 12u, "a second read %u, want 12 (a read does not restart)", v);
+    CHECK_OK(ctx, sluice_counters_read_restart(cn, &v));
+    CHECK(v == 12u, "read_restart %u, want 12", v);
+    CHECK_OK(ctx, sluice_counters_read(cn, &v));
+    CHECK(v == 0u, "after a restart %u, want 0", v);
+    launch_add_up(ctx, k, s, a, 2);
+    launch_add_up(ctx, k, s, a, 1);
+    CHECK_OK(ctx, sluice_counters_read_restart(cn, &v));
+    CHECK(v == 17u, "two launches after a restart %u, want 17", v);
+    launch_add_up(ctx, k, s, &big, 1); /* the device's counter wraps */
+    CHECK_OK(ctx, sluice_counters_read_restart(cn, &v));
+    CHECK(v == big, "%#x, want %#x", v, big);
+    launch_add_up(ctx, k, s, &small, 1);
+    CHECK_OK(ctx, sluice_counters_read(cn, &v));
+    CHECK(v == small, "after the wrap %#x, want %#x", v, small);
+    CHECK_OK(ctx, sluice_counters_reset(cn));
+    CHECK_OK(ctx, sluice_counters_read(cn, &v));
+    CHECK(v == 0u, "after a reset %u, want 0", v);
+    launch_add_up(ctx, k, s, a, 2);
+    CHECK_OK(ctx, sluice_counters_read(cn, &v));
+    CHECK(v == 12u, "after a reset and a launch %u, want 12", v);
+    CHECK(sluice_counters_read_restart(NULL, &v) == SLUICE_ERROR_INVALID_ARGUMENT &&
+              sluice_counters_read_restart(cn, NULL) == SLUICE_ERROR_INVALID_ARGUMENT,
+          "NULL arguments");
+    sluice_counters_destroy(cn);
+    sluice_stream_destroy(s);
+    sluice_kernel_destroy(k);
+}
+
 static void test_loop(sluice_context *ctx, sluice_program *p)
 {
     const size_t n = 50000;
@@ -579,6 +639,18 @@ static void test_loop(sluice_context *ctx, sluice_program *p)
     CHECK(ps && ps->values[0] == alive && ps->values[1] == alive, "pass 0 values %u %u, want %zu",
           ps ? ps->values[0] : 0, ps ? ps->values[1] : 0, alive);
     CHECK(sluice_loop_pass(loop, want) == NULL, "no stats past the end");
+    /* every pass counts from zero (the counter restarts, no reset), and
+     * afterwards the counter reads the last pass's count */
+    for (unsigned i = 0; i < want; ++i) {
+        ps = sluice_loop_pass(loop, i);
+        CHECK(ps->values[1] == ps->values[0], "pass %u: counted %u, emitted %u", i, ps->values[1],
+              ps->values[0]);
+    }
+    uint32_t last = 0;
+    CHECK_OK(ctx, sluice_counters_read(u.cn, &last));
+    CHECK(want > 0 && last == sluice_loop_pass(loop, want - 1)->values[1],
+          "after the loop the counter reads %u, want the last pass's %u", last,
+          want > 0 ? sluice_loop_pass(loop, want - 1)->values[1] : 0);
     sluice_loop_destroy(loop);
 
     /* Pass limit and oracle. */
@@ -783,6 +855,12 @@ static void test_loop_overflow(sluice_context *ctx, sluice_program *p, sluice_ou
     CHECK(sluice_counters_read(cn, &count) == SLUICE_ERROR_OVERFLOW &&
               strstr(sluice_context_error(ctx), "so the counts are void"),
           "void counters: %s", sluice_context_error(ctx));
+    /* a restart reports the void counts once and clears the note */
+    CHECK(sluice_counters_read_restart(cn, &count) == SLUICE_ERROR_OVERFLOW &&
+              strstr(sluice_context_error(ctx), "so the counts are void"),
+          "void counters, restarted: %s", sluice_context_error(ctx));
+    CHECK_OK(ctx, sluice_counters_read(cn, &count));
+    CHECK(count == 0, "after the restart %u, want 0", count);
     CHECK_OK(ctx, sluice_counters_reset(cn));
     CHECK_OK(ctx, sluice_counters_read(cn, &count));
 
@@ -1165,6 +1243,7 @@ int main(void)
     test_multi_emit(ctx, p, SLUICE_UNORDERED);
     test_block_emit(ctx, p, "small_values");
     test_block_emit(ctx, p, "small_values4");
+    test_counters_restart(ctx, p);
     test_loop(ctx, p);
     test_mapped_lengths(ctx, p);
     test_loop_overflow(ctx, p, SLUICE_ORDERED);

@@ -6,9 +6,10 @@
 sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice_stream *hits)
 {
     sluice_kernel *k = t->k_fused;
-    sluice_status st = sluice_counters_reset(t->counters);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_input(k, 0, rays);
+    /* the counters are read and restarted after the launch, not reset
+     * before it: one command less a frame (nothing else counts into them in
+     * a fused tracer) */
+    sluice_status st = sluice_kernel_set_input(k, 0, rays);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 1, hits, 1);
     if (st == SLUICE_OK)
@@ -31,7 +32,7 @@ sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice
         st = sluice_kernel_launch(k);
     uint32_t c[RT_CTR_TRACE_COUNT];
     if (st == SLUICE_OK)
-        st = sluice_counters_read(t->counters, c);
+        st = sluice_counters_read_restart(t->counters, c);
     if (st != SLUICE_OK)
         return st;
     (void)n;

@@ -213,18 +213,18 @@ static sluice_status launch(sluice_kernel *k, size_t count)
     return count ? sluice_kernel_launch_count(k, count) : SLUICE_OK;
 }
 
-/* Launches a generator kernel over `count` records with the counters zeroed
- * and bound, and reads them back (waits) into c[0 .. 2]. */
+/* Launches a generator kernel over `count` records with the counters bound,
+ * and reads what it counted (waits) into c[0 .. 2]: the counters are
+ * restarted by each read, not reset before each launch (one command less;
+ * only these launches count into them). */
 static sluice_status launch_counted(sr_point_grid *g, sluice_kernel *k, size_t count, uint32_t c[3])
 {
     c[0] = c[1] = c[2] = 0;
-    sluice_status st = sluice_counters_reset(g->counters);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_counters(k, g->counters);
+    sluice_status st = sluice_kernel_set_counters(k, g->counters);
     if (st == SLUICE_OK)
         st = launch(k, count);
     if (st == SLUICE_OK)
-        st = sluice_counters_read(g->counters, c);
+        st = sluice_counters_read_restart(g->counters, c);
     return st;
 }
 

@@ -77,7 +77,15 @@ sluice_status sluice_counters_reset(sluice_counters *c)
     if (!c)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     sl_clear_error(c->ctx);
-    return sl_vars_fill(c->ctx, c->var, c->count + 1, 0);
+    sluice_status st = sl_vars_fill(c->ctx, c->var, c->count + 1, 0);
+    if (st == SLUICE_OK)
+        memset(c->base, 0, sizeof c->base);
+    return st;
+}
+
+void sl_counters_restart(sluice_counters *c, const cl_uint *raw)
+{
+    memcpy(c->base, raw, c->count * sizeof *raw);
 }
 
 sluice_status sl_counters_check(sluice_counters *c, cl_uint note)
@@ -92,15 +100,40 @@ sluice_status sl_counters_check(sluice_counters *c, cl_uint note)
                    what);
 }
 
-sluice_status sluice_counters_read(sluice_counters *c, uint32_t *values)
+sluice_status sl_counters_read_raw(sluice_counters *c, cl_uint *raw)
+{
+    return sl_vars_read(c->ctx, c->var, c->count + 1, raw);
+}
+
+/* Reads the counts since the last reset or restart; restarts them when
+ * `restart`. */
+static sluice_status read_counts(sluice_counters *c, uint32_t *values, int restart)
 {
     if (!c || !values)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     sl_clear_error(c->ctx);
     cl_uint v[SLUICE_MAX_COUNTERS + 1];
-    sluice_status st = sl_vars_read(c->ctx, c->var, c->count + 1, v);
-    if (st == SLUICE_OK)
-        for (size_t i = 0; i < c->count; ++i)
-            values[i] = v[i];
-    return st == SLUICE_OK ? sl_counters_check(c, v[c->count]) : st;
+    sluice_status st = sl_counters_read_raw(c, v);
+    if (st != SLUICE_OK)
+        return st;
+    for (size_t i = 0; i < c->count; ++i)
+        values[i] = v[i] - c->base[i]; /* modulo 2^32: a wrapped counter still subtracts */
+    if (!restart)
+        return sl_counters_check(c, v[c->count]);
+    sl_counters_restart(c, v);
+    /* the note was the restarted counts': cleared (a command, only then;
+     * should it fail, the next read reports the note again) */
+    if (v[c->count])
+        (void)sl_vars_fill(c->ctx, c->var + (cl_uint)c->count, 1, 0);
+    return sl_counters_check(c, v[c->count]);
+}
+
+sluice_status sluice_counters_read(sluice_counters *c, uint32_t *values)
+{
+    return read_counts(c, values, 0);
+}
+
+sluice_status sluice_counters_read_restart(sluice_counters *c, uint32_t *values)
+{
+    return read_counts(c, values, 1);
 }

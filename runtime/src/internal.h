@@ -146,6 +146,9 @@ struct sluice_counters {
     cl_uint var; /* count + 1 variables: the counters, then the overflow note (0: none,
                     else 1 + the length variable of an overflowed stream a kernel read) */
     char **names;
+    /* what reads subtract: the device's values at the last restart (0
+     * after a reset), so that restarting needs no command */
+    cl_uint base[SLUICE_MAX_COUNTERS];
 };
 
 typedef enum sl_arg_kind { SL_ARG_UNSET = 0, SL_ARG_VALUE, SL_ARG_STREAM } sl_arg_kind;
@@ -222,6 +225,12 @@ void sl_describe_overflow(sluice_context *ctx, cl_uint var, char *buf, size_t si
  * the counters of `c`, says that a kernel counting into them read an
  * overflowed stream. */
 sluice_status sl_counters_check(sluice_counters *c, cl_uint note);
+/* Reads the counters' device values (not less the base) and the note:
+ * raw[0 .. count] (count + 1 entries). */
+sluice_status sl_counters_read_raw(sluice_counters *c, cl_uint *raw);
+/* Restarts the counters from the device values `raw` (which must be what
+ * the device holds now): later reads count from there. */
+void sl_counters_restart(sluice_counters *c, const cl_uint *raw);
 
 /* Variable pool: allocate `count` consecutive variables (zeroed on the
  * device), free them, read and write them. */

@@ -17,7 +17,8 @@ struct sluice_loop {
     unsigned pass_count, pass_cap;
     uint32_t *values;
     size_t value_count;
-    int counters_fresh; /* read_batched already read the counters */
+    int counters_fresh;               /* read_batched already read the counters */
+    cl_uint raw[SLUICE_MAX_COUNTERS]; /* the counters' device values at the last read */
 };
 
 static double now_seconds(void)
@@ -114,8 +115,10 @@ static sluice_status read_batched(sluice_loop *l)
         }
     }
     if (c && c->count) {
-        for (size_t i = 0; i < c->count; ++i)
-            l->values[l->desc.stream_count + i] = v[c->var - lo + i];
+        for (size_t i = 0; i < c->count; ++i) {
+            l->raw[i] = v[c->var - lo + i];
+            l->values[l->desc.stream_count + i] = l->raw[i] - c->base[i];
+        }
         l->counters_fresh = 1;
         return sl_counters_check(l->desc.counters, v[c->var - lo + c->count]);
     }
@@ -141,10 +144,13 @@ static sluice_status read_values(sluice_loop *l)
     }
     if (batched != SLUICE_OK)
         return batched;
-    if (l->desc.counters && !l->counters_fresh) {
-        sluice_status st = sluice_counters_read(l->desc.counters, l->values + k);
+    sluice_counters *c = l->desc.counters;
+    if (c && !l->counters_fresh) {
+        sluice_status st = sluice_counters_read(c, l->values + k);
         if (st != SLUICE_OK)
             return st;
+        for (size_t i = 0; i < c->count; ++i)
+            l->raw[i] = l->values[k + i] + c->base[i];
     }
     return SLUICE_OK;
 }
@@ -195,10 +201,11 @@ sluice_status sluice_loop_run(sluice_loop *l)
             l->pass_cap = cap;
         }
         double t0 = now_seconds();
+        /* each pass counts from zero: from the values just read, which the
+         * device still holds (nothing was queued since), at no command */
         if (l->desc.reset_counters && l->desc.counters)
-            st = sluice_counters_reset(l->desc.counters);
-        if (st == SLUICE_OK)
-            st = l->desc.pass(l->desc.user, pass, choice);
+            sl_counters_restart(l->desc.counters, l->raw);
+        st = l->desc.pass(l->desc.user, pass, choice);
         if (st == SLUICE_OK)
             st = read_values(l);
         sluice_pass_stats *ps = &l->passes[l->pass_count++];

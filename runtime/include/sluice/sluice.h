@@ -444,14 +444,25 @@ size_t sluice_counters_count(const sluice_counters *counters);
 /** The index of the counter called `name`, or -1. */
 int sluice_counters_index(const sluice_counters *counters, const char *name);
 
-/** Queues setting every counter to 0. */
+/** Queues setting every counter to 0 (and clears the overflow note). */
 sluice_status sluice_counters_reset(sluice_counters *counters);
 
-/** Reads all counters into `values` (sluice_counters_count() entries). Waits
- *  only for the work queued before the call. Returns SLUICE_ERROR_OVERFLOW
- *  when, since the last reset, a kernel counting into them read an
- *  overflowed input (so it counted nothing). */
+/** Reads all counters into `values` (sluice_counters_count() entries): the
+ *  counts since the last reset or restart. Waits only for the work queued
+ *  before the call. Returns SLUICE_ERROR_OVERFLOW when, since the last
+ *  reset, a kernel counting into them read an overflowed input (so it
+ *  counted nothing). */
 sluice_status sluice_counters_read(sluice_counters *counters, uint32_t *values);
+
+/** sluice_counters_read(), then restarts the counters: later reads give the
+ *  counts of the work queued after this call. Unlike a reset before each
+ *  round of work, it queues nothing: the counters keep counting on the
+ *  device and the host remembers where they stood (a reset is a command of
+ *  its own, and on many-thread CPU devices each command costs tens of
+ *  microseconds). When it returns SLUICE_ERROR_OVERFLOW (the counts read
+ *  are void) it also clears that note, so that the next round counts
+ *  afresh. */
+sluice_status sluice_counters_read_restart(sluice_counters *counters, uint32_t *values);
 
 /* ------------------------------------------------------------------ */
 /* Multipass loops (Purcell 4.1.2)                                     */
@@ -478,7 +489,9 @@ typedef struct sluice_loop_desc {
     sluice_stream *const *streams; /**< lengths to watch (may be NULL) */
     size_t stream_count;           /**< how many */
     sluice_counters *counters;     /**< counters to watch (may be NULL) */
-    int reset_counters;            /**< non-zero: zero them before each pass */
+    int reset_counters;            /**< non-zero: each pass counts from zero (they are
+                                        restarted, sluice_counters_read_restart(), at no
+                                        extra command) */
     unsigned max_passes;           /**< 0: 100000 */
 } sluice_loop_desc;
 
