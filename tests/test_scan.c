@@ -262,9 +262,25 @@ static void test_overflowed_input(sluice_context *ctx)
     }
 }
 
+/* sluice_streams_prepare: builds what it is asked for (every algorithm,
+ * then nothing, then the scan again, and a scan runs after), refuses
+ * unknown bits by name and a NULL context. */
+static void test_prepare(sluice_context *ctx)
+{
+    CHECK_OK(ctx, sluice_streams_prepare(ctx, SLUICE_ALG_ALL));
+    CHECK_OK(ctx, sluice_streams_prepare(ctx, 0));
+    CHECK_OK(ctx, sluice_streams_prepare(ctx, SLUICE_ALG_SCAN));
+    CHECK(sluice_streams_prepare(ctx, 1u << 7) == SLUICE_ERROR_INVALID_ARGUMENT &&
+              strstr(sluice_context_error(ctx), "unknown algorithm bits 0x80"),
+          "unknown bits: %s", sluice_context_error(ctx));
+    CHECK(sluice_streams_prepare(NULL, SLUICE_ALG_SCAN) == SLUICE_ERROR_INVALID_ARGUMENT,
+          "NULL context");
+}
+
 int main(void)
 {
     sluice_context *ctx = check_context(0);
+    test_prepare(ctx);
     const size_t sizes[] = {0,   1,    2,    3,    4,    5,    7,     8,     9,       255,    256,
                             257, 1023, 1024, 1025, 4095, 4097, 65535, 65537, 1048575, 1048577};
     for (size_t si = 0; si < sizeof sizes / sizeof *sizes; ++si)

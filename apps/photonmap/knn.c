@@ -167,6 +167,10 @@ sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out)
     sluice_status st = sr_program_create(
         ctx, (const char *[]){"rt_types.h", "pg_types.h", "pm_types.h", "pm_knn.cl"}, 4, NULL,
         &knn->prog);
+    /* the scans of the cell counts and the sort of the queries by cell,
+     * built now rather than in the first estimate */
+    if (st == SLUICE_OK)
+        st = sluice_streams_prepare(ctx, SLUICE_ALG_SCAN | SLUICE_ALG_SORT_RADIX);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(knn->prog, "pm_knn_gather", &knn->k_gather);
     if (st == SLUICE_OK)

@@ -275,7 +275,7 @@ static const char *const map_names[] = {"count", "bitonic", "stencil"};
 
 /* The statistics as text (table) or JSON (same figures). */
 static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_renderer *r,
-                   double total, unsigned spp, sluice_context *ctx)
+                   double setup, double total, unsigned spp, sluice_context *ctx)
 {
     const pm_stats *s = pm_renderer_stats(r);
     const pm_photon_stats *p = &s->photons;
@@ -294,8 +294,9 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
                 o->k, (double)s->max_radius);
         fprintf(f,
                 "phases (s): trace photons %.3f, build map %.3f, trace rays %.3f, radiance "
-                "estimate %.3f, total %.3f\n",
-                s->trace_photons_s, s->build_map_s, s->trace_rays_s, s->estimate_s, total);
+                "estimate %.3f, total %.3f; before them, setup %.3f (the renderer made, its "
+                "kernels built)\n",
+                s->trace_photons_s, s->build_map_s, s->trace_rays_s, s->estimate_s, total, setup);
         fprintf(f,
                 "photons: emitted %llu, stored %llu (caustic %llu), left the scene %llu, "
                 "absorbed %llu, depth limit %llu, %u bounce passes in %u batches\n",
@@ -367,6 +368,7 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
             "  \"phases\": {\"trace_photons\": %.6f, \"build_map\": %.6f, \"trace_rays\": %.6f, "
             "\"radiance_estimate\": %.6f, \"total\": %.6f},\n",
             s->trace_photons_s, s->build_map_s, s->trace_rays_s, s->estimate_s, total);
+    fprintf(f, "  \"setup_s\": %.6f,\n", setup);
     fprintf(f,
             "  \"photons\": {\"emitted\": %llu, \"stored\": %llu, \"caustic\": %llu, "
             "\"left_scene\": %llu, \"absorbed\": %llu, \"depth_limit\": %llu, \"nonfinite\": "
@@ -448,7 +450,9 @@ int main(int argc, char **argv)
     int exit_code = 1;
     if (sr_cli_context(PROG, cc, &ctx))
         goto done;
+    double setup = sr_clock_seconds();
     st = pm_renderer_create(ctx, scene, o, &r, err, sizeof err);
+    setup = sr_clock_seconds() - setup;
     if (st != SLUICE_OK) {
         fprintf(stderr, PROG ": %s\n", err);
         goto done;
@@ -488,14 +492,14 @@ int main(int argc, char **argv)
     if (bad)
         fprintf(stderr, PROG ": warning: %zu non-finite pixels written as black\n", bad);
     if (!cc->quiet)
-        report(stderr, 0, &c, o, r, total, pr.done, ctx);
+        report(stderr, 0, &c, o, r, setup, total, pr.done, ctx);
     if (cc->stats) {
         FILE *f = fopen(cc->stats, "w");
         if (!f) {
             fprintf(stderr, PROG ": --stats %s: cannot write the file\n", cc->stats);
             goto done;
         }
-        report(f, 1, &c, o, r, total, pr.done, ctx);
+        report(f, 1, &c, o, r, setup, total, pr.done, ctx);
         if (fclose(f) != 0) {
             fprintf(stderr, PROG ": --stats %s: write failed\n", cc->stats);
             goto done;

@@ -255,6 +255,12 @@ sluice_status pm_renderer_create(sluice_context *ctx, const sr_scene *scene, con
         st = sluice_stream_create(ctx, sizeof(pm_knn_result), pixels, &r->results);
     if (st == SLUICE_OK)
         st = sr_point_grid_create(ctx, &r->grid);
+    /* the map build's stream algorithms, built now: setup, not the phase */
+    if (st == SLUICE_OK && (st = sr_point_grid_prepare(r->grid, r->opt.map)) != SLUICE_OK) {
+        sr_set_error(err, err_size, "photon mapper: %s", sr_point_grid_error(r->grid));
+        pm_renderer_destroy(r);
+        return st;
+    }
     if (st == SLUICE_OK)
         st = pm_knn_create(ctx, &r->knn);
     if (st != SLUICE_OK) {

@@ -186,6 +186,10 @@ sluice_status pm_photons_create(rt_tracer *tracer, pm_photons **out, char *err, 
         st = sluice_kernel_set_counters(p->k_bounce, p->counters);
     if (st == SLUICE_OK)
         st = sluice_stream_create(ctx, sizeof(pm_photon), 1, &p->stored);
+    /* bound now (and again every pass), so that the runtime's kernel for
+     * ordered outputs is built here and not in the first pass */
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_output(p->k_route, 3, 0, p->stored, SLUICE_ORDERED);
     if (st != SLUICE_OK) {
         sr_set_error(err, err_size, "photon tracing: %s", sluice_context_error(ctx));
         pm_photons_destroy(p);

@@ -528,6 +528,23 @@ runtime_fail:
     return FAIL(g, st, "point grid: %s: %s", step, sluice_context_error(g->ctx));
 }
 
+sluice_status sr_point_grid_prepare(sr_point_grid *g, sr_point_grid_build_kind kind)
+{
+    if (!g)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    /* the statistics' reduction, then each build's sort or routing and the
+     * cell index (the stencil build sorts the cells it redistributes) */
+    unsigned alg = SLUICE_ALG_REDUCE | SLUICE_ALG_CELL_INDEX;
+    if (kind == SR_POINT_GRID_BITONIC)
+        alg |= SLUICE_ALG_SORT_BITONIC;
+    else if (kind == SR_POINT_GRID_STENCIL)
+        alg |= SLUICE_ALG_ROUTE | SLUICE_ALG_SORT_RADIX;
+    else if (kind != SR_POINT_GRID_COUNT)
+        return FAIL(g, SLUICE_ERROR_INVALID_ARGUMENT, "point grid: unknown build %d", (int)kind);
+    sluice_status st = sluice_streams_prepare(g->ctx, alg);
+    return st == SLUICE_OK ? st : FAIL(g, st, "point grid: %s", sluice_context_error(g->ctx));
+}
+
 sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sluice_stream *points,
                                   size_t stride, size_t n, sr_point_grid_build_kind kind,
                                   uint32_t slots)

@@ -161,6 +161,11 @@ sluice_status sr_point_grid_create(sluice_context *ctx, sr_point_grid **out);
 /** Frees the builder and its streams (NULL is fine). */
 void sr_point_grid_destroy(sr_point_grid *g);
 
+/** Builds now the kernels of the stream algorithms that builds of `kind`
+ *  use (sluice_streams_prepare), so that the first build does not pay for
+ *  them: setup, not a build's time. */
+sluice_status sr_point_grid_prepare(sr_point_grid *g, sr_point_grid_build_kind kind);
+
 /**
  * (Re)builds the grid described by `desc` (see rt_grid_desc_check for what a
  * description must satisfy) over the first `n` records of `points`, whose

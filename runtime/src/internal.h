@@ -248,6 +248,10 @@ sluice_status sl_sort_scratch(sluice_context *ctx, size_t bytes, int two, cl_mem
 /* The context-owned program built from embedded source `name` (e.g.
  * "scan.cl"), compiled on first use. */
 sluice_status sl_embedded_program(sluice_context *ctx, const char *name, sluice_program **out);
+/* Creates the context's kernel that scans ordered outputs' counts
+ * (runtime.cl), if it has none yet: built when an ordered output is bound,
+ * not at the first launch, so that setup pays for it. */
+sluice_status sl_ordered_ready(sluice_context *ctx);
 
 /* Builds a raw cl_kernel (not a SLUICE_KERNEL) from a context-owned embedded
  * program; the caller releases it. */

@@ -159,6 +159,8 @@ sluice_status sluice_kernel_set_output(sluice_kernel *k, unsigned arg, unsigned 
         return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT, "kernel %s: bad output mode %d",
                        k->name, (int)mode);
     sluice_status st = bind_stream(k, arg, stream);
+    if (st == SLUICE_OK && mode == SLUICE_ORDERED)
+        st = sl_ordered_ready(k->ctx);
     if (st != SLUICE_OK)
         return st;
     if (k->out[slot]) /* the slot moves to this argument */
@@ -319,6 +321,13 @@ static sluice_status set_hidden(sluice_kernel *k, const sl_launch *L)
     return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "setting launch arguments");
 }
 
+sluice_status sl_ordered_ready(sluice_context *ctx)
+{
+    if (ctx->scan_kernel)
+        return SLUICE_OK;
+    return sl_embedded_cl_kernel(ctx, "runtime.cl", "sluice_scan_chunk_counts", &ctx->scan_kernel);
+}
+
 /* Queues setting the length of the stream with variable `dst` to the
  * device-side length of the input (variable `src`, capacity `cap`), or
  * voiding it when the input overflowed (kernels/runtime.cl): for the mapped
@@ -463,9 +472,8 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
             st = set_hidden(k, &L);
             if (st == SLUICE_OK)
                 st = enqueue(k, global, 1);
-            if (st == SLUICE_OK && !ctx->scan_kernel)
-                st = sl_embedded_cl_kernel(ctx, "runtime.cl", "sluice_scan_chunk_counts",
-                                           &ctx->scan_kernel);
+            if (st == SLUICE_OK)
+                st = sl_ordered_ready(ctx);
             for (unsigned s = 0; st == SLUICE_OK && s < SLUICE_MAX_OUTPUTS; ++s) {
                 if (!((L.ordered_mask >> s) & 1u))
                     continue;

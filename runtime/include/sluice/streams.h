@@ -34,6 +34,27 @@ typedef enum sluice_scalar_type {
 /** Reduction operators. */
 typedef enum sluice_reduce_op { SLUICE_SUM = 0, SLUICE_MIN = 1, SLUICE_MAX = 2 } sluice_reduce_op;
 
+/** The stream algorithms, as bits of sluice_streams_prepare()'s mask. */
+typedef enum sluice_algorithm {
+    SLUICE_ALG_SCAN = 1u << 0,         /**< sluice_scan */
+    SLUICE_ALG_REDUCE = 1u << 1,       /**< sluice_reduce */
+    SLUICE_ALG_COMPACT = 1u << 2,      /**< sluice_compact, sluice_split, sluice_partition */
+    SLUICE_ALG_SORT_BITONIC = 1u << 3, /**< sluice_sort_bitonic */
+    SLUICE_ALG_SORT_RADIX = 1u << 4,   /**< sluice_sort_radix */
+    SLUICE_ALG_CELL_INDEX = 1u << 5,   /**< sluice_cell_index_search and _count */
+    SLUICE_ALG_ROUTE = 1u << 6,        /**< sluice_route_bounded */
+    SLUICE_ALG_ALL = (1u << 7) - 1u    /**< every one */
+} sluice_algorithm;
+
+/** Builds the kernels of the algorithms in `algorithms` (a mask of
+ *  sluice_algorithm bits) now, as the first call of each would have; later
+ *  calls find them built. For setup code: a renderer's first frame, or a
+ *  benchmark's first run, then does not pay for the builds (tens of
+ *  milliseconds each from PoCL's kernel cache, seconds cold). Optional:
+ *  without it each algorithm builds its kernels on first use. Unknown bits
+ *  are SLUICE_ERROR_INVALID_ARGUMENT. */
+sluice_status sluice_streams_prepare(sluice_context *ctx, unsigned algorithms);
+
 /** Prefix sum of a scalar stream into `out` (capacity >= input length; may
  *  not be `in`). Exclusive: out[i] = in[0] + ... + in[i-1], out[0] = 0.
  *  Inclusive: out[i] = in[0] + ... + in[i]. If `total` is not NULL it
