@@ -8,7 +8,9 @@ photon-map build, each phase beside his GeForce FX 5900 Ultra times.
 
 Writes JSON naming the CPU; prints a table. Times are host wall times of one
 run per configuration (the first render also builds the kernels, so each
-configuration runs once to warm PoCL's cache, then is timed).
+configuration runs once to warm PoCL's cache, then is timed). Setup, the
+renderer's creation with its kernels built, comes before the phases and is
+recorded beside them (setup_s), not in them.
 
 Each build runs twice: with the defaults (the stream tracer, one kNN shell
 per pass: Purcell's passes) and with the fastest options that give the same
@@ -85,6 +87,7 @@ def main():
                        "size": s["size"] if not a.quick else "128x96",
                        "photons": s["photons"], "k": s["k"], "grid": s["grid"],
                        "light_samples": s["light_samples"], "phases_s": ph,
+                       "setup_s": r.get("setup_s"),
                        "stored": r["photons"]["stored"], "emitted": r["photons"]["emitted"],
                        "mean_photons": r["estimates"]["mean_photons"],
                        "stencil_overflow": r["map_grid"]["overflow_points"]}
