@@ -158,9 +158,12 @@ sluice_status sluice_kernel_set_output(sluice_kernel *k, unsigned arg, unsigned 
     if (mode != SLUICE_ORDERED && mode != SLUICE_UNORDERED)
         return sl_fail(k->ctx, SLUICE_ERROR_INVALID_ARGUMENT, "kernel %s: bad output mode %d",
                        k->name, (int)mode);
-    sluice_status st = bind_stream(k, arg, stream);
-    if (st == SLUICE_OK && mode == SLUICE_ORDERED)
-        st = sl_ordered_ready(k->ctx);
+    /* an ordered output's launches need the runtime's scan of the counts:
+     * built now, at setup, and before anything is bound, so that a failed
+     * build leaves the kernel as it was */
+    sluice_status st = mode == SLUICE_ORDERED ? sl_ordered_ready(k->ctx) : SLUICE_OK;
+    if (st == SLUICE_OK)
+        st = bind_stream(k, arg, stream);
     if (st != SLUICE_OK)
         return st;
     if (k->out[slot]) /* the slot moves to this argument */

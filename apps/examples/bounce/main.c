@@ -228,7 +228,7 @@ typedef struct bounce_state {
 /* One pass: move the live particles into `next`, then swap the streams so
  * that `live` holds the survivors. The kernel bound `live` and `next` once;
  * after a swap it sees the exchanged buffers at its next launch. Called by
- * sluice_loop_run, which has already reset the counters. */
+ * sluice_loop_run, which has already restarted the counters from zero. */
 static sluice_status bounce_pass(void *user, unsigned pass, unsigned choice)
 {
     (void)choice;
