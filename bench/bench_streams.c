@@ -416,21 +416,25 @@ static void run_chain(void *a)
 }
 
 /* 100 frames of the smallest round trips a renderer makes: one launch and
- * a wait for it (trip_counters 0), or a counters reset, one launch and the
- * counters read back (blocking; 1). Against the chain above, what waiting
- * for the device, and a reset and a read, add to a frame. */
+ * a wait for it (trip_counters 0), a counters reset, one launch and the
+ * counters read back (blocking; 1), or one launch and the counters read and
+ * restarted (sluice_counters_read_restart, no reset command; 2: a fused
+ * frame's commands now). Against the chain above, what waiting for the
+ * device, and a reset and a read, add to a frame. */
 static void run_round_trip(void *a)
 {
     bench *b = a;
     uint32_t c;
     for (int i = 0; i < 100; ++i) {
-        if (b->trip_counters)
+        if (b->trip_counters == 1)
             TRY(sluice_counters_reset(b->trip));
         TRY(sluice_kernel_set_input(b->chain, 0, i % 2 ? b->chain_b : b->chain_a));
         TRY(sluice_kernel_set_stream(b->chain, 1, i % 2 ? b->chain_a : b->chain_b, 1));
         TRY(sluice_kernel_launch(b->chain));
-        if (b->trip_counters)
+        if (b->trip_counters == 1)
             TRY(sluice_counters_read(b->trip, &c));
+        else if (b->trip_counters == 2)
+            TRY(sluice_counters_read_restart(b->trip, &c));
         else
             TRY(sluice_context_finish(ctx));
     }
@@ -657,9 +661,11 @@ int main(int argc, char **argv)
     double t_sync = best_of(NULL, run_round_trip, &b, reps);
     b.trip_counters = 1;
     double t_trip = best_of(NULL, run_round_trip, &b, reps);
+    b.trip_counters = 2;
+    double t_restart = best_of(NULL, run_round_trip, &b, reps);
     uint32_t check[1024];
     TRY(sluice_stream_download(b.chain_a, check, 1024, NULL));
-    if (check[0] != b.keys[0] + 300u * (uint32_t)(reps + 1)) {
+    if (check[0] != b.keys[0] + 400u * (uint32_t)(reps + 1)) {
         fprintf(stderr, "bench_streams: the launch chain computed a wrong result\n");
         return 1;
     }
@@ -724,13 +730,15 @@ int main(int argc, char **argv)
         "qsort of %zu pairs: %.3f s; radix sort is %.1fx faster than qsort, %.2fx than C radix\n",
         n, t_qsort, t_qsort / t_radix, t_cradix / t_radix);
     printf("chain of 100 dependent launches: %.2f us per launch\n", per_launch_us);
-    double sync_us = t_sync / 100.0 * 1e6, trip_us = t_trip / 100.0 * 1e6;
+    double sync_us = t_sync / 100.0 * 1e6, trip_us = t_trip / 100.0 * 1e6,
+           restart_us = t_restart / 100.0 * 1e6;
     printf("a launch and a wait for it: %.2f us; counters reset, a launch, the counters read: "
-           "%.2f us\n",
-           sync_us, trip_us);
+           "%.2f us; a launch, the counters read and restarted: %.2f us\n",
+           sync_us, trip_us, restart_us);
     fprintf(f, "  ],\n  \"qsort_seconds\": %.6f,\n", t_qsort);
     fprintf(f, "  \"launch_chain_us_per_launch\": %.3f,\n", per_launch_us);
     fprintf(f, "  \"launch_and_wait_us\": %.3f,\n  \"round_trip_us\": %.3f,\n", sync_us, trip_us);
+    fprintf(f, "  \"restart_trip_us\": %.3f,\n", restart_us);
     fprintf(f, "  \"targets\": {\n");
     const result *sp_o = &res[2], *sp_u = &res[3], *scan = &res[0];
     double frac_o = sp_o->bytes / sp_o->seconds / 1e9 / copy_gbs;
