@@ -265,8 +265,6 @@ static sluice_status bounce(pm_photons *p, const pm_photon_options *opt, size_t 
         st = rt_tracer_trace_stream(p->tracer, p->rays, n, p->hits);
     if (st == SLUICE_OK)
         st = sluice_stream_clear(p->next);
-    if (st == SLUICE_OK)
-        st = sluice_counters_reset(p->counters);
     sluice_kernel *k = p->k_bounce;
     uint32_t depth = opt->max_depth;
     if (st == SLUICE_OK)
@@ -298,9 +296,10 @@ static sluice_status bounce(pm_photons *p, const pm_photon_options *opt, size_t 
         st = sluice_kernel_set_output(k, 4, 1, p->next, SLUICE_ORDERED);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(k);
+    /* read and restarted, not reset each pass: only pm_bounce counts */
     uint32_t c[PC_COUNT];
     if (st == SLUICE_OK)
-        st = sluice_counters_read(p->counters, c);
+        st = sluice_counters_read_restart(p->counters, c);
     if (st != SLUICE_OK)
         return st;
     stats->bounced += c[PC_BOUNCED];
