@@ -83,9 +83,10 @@ sluice_status sluice_counters_reset(sluice_counters *c)
     return st;
 }
 
-void sl_counters_restart(sluice_counters *c, const cl_uint *raw)
+void sl_counters_advance(sluice_counters *c, const uint32_t *counts)
 {
-    memcpy(c->base, raw, c->count * sizeof *raw);
+    for (size_t i = 0; i < c->count; ++i)
+        c->base[i] += counts[i]; /* modulo 2^32, as the reads subtract */
 }
 
 sluice_status sl_counters_check(sluice_counters *c, cl_uint note)
@@ -100,11 +101,6 @@ sluice_status sl_counters_check(sluice_counters *c, cl_uint note)
                    what);
 }
 
-sluice_status sl_counters_read_raw(sluice_counters *c, cl_uint *raw)
-{
-    return sl_vars_read(c->ctx, c->var, c->count + 1, raw);
-}
-
 /* Reads the counts since the last reset or restart; restarts them when
  * `restart`. */
 static sluice_status read_counts(sluice_counters *c, uint32_t *values, int restart)
@@ -113,14 +109,14 @@ static sluice_status read_counts(sluice_counters *c, uint32_t *values, int resta
         return SLUICE_ERROR_INVALID_ARGUMENT;
     sl_clear_error(c->ctx);
     cl_uint v[SLUICE_MAX_COUNTERS + 1];
-    sluice_status st = sl_counters_read_raw(c, v);
+    sluice_status st = sl_vars_read(c->ctx, c->var, c->count + 1, v);
     if (st != SLUICE_OK)
         return st;
     for (size_t i = 0; i < c->count; ++i)
         values[i] = v[i] - c->base[i]; /* modulo 2^32: a wrapped counter still subtracts */
     if (!restart)
         return sl_counters_check(c, v[c->count]);
-    sl_counters_restart(c, v);
+    sl_counters_advance(c, values);
     /* the note was the restarted counts': cleared (a command, only then;
      * should it fail, the next read reports the note again) */
     if (v[c->count])

@@ -225,12 +225,9 @@ void sl_describe_overflow(sluice_context *ctx, cl_uint var, char *buf, size_t si
  * the counters of `c`, says that a kernel counting into them read an
  * overflowed stream. */
 sluice_status sl_counters_check(sluice_counters *c, cl_uint note);
-/* Reads the counters' device values (not less the base) and the note:
- * raw[0 .. count] (count + 1 entries). */
-sluice_status sl_counters_read_raw(sluice_counters *c, cl_uint *raw);
-/* Restarts the counters from the device values `raw` (which must be what
- * the device holds now): later reads count from there. */
-void sl_counters_restart(sluice_counters *c, const cl_uint *raw);
+/* Restarts the counters after a read that gave `counts` (nothing counted
+ * into them since): later reads count from there. */
+void sl_counters_advance(sluice_counters *c, const uint32_t *counts);
 
 /* Variable pool: allocate `count` consecutive variables (zeroed on the
  * device), free them, read and write them. */

@@ -17,8 +17,7 @@ struct sluice_loop {
     unsigned pass_count, pass_cap;
     uint32_t *values;
     size_t value_count;
-    int counters_fresh;               /* read_batched already read the counters */
-    cl_uint raw[SLUICE_MAX_COUNTERS]; /* the counters' device values at the last read */
+    int counters_fresh; /* read_batched already read the counters */
 };
 
 static double now_seconds(void)
@@ -115,10 +114,8 @@ static sluice_status read_batched(sluice_loop *l)
         }
     }
     if (c && c->count) {
-        for (size_t i = 0; i < c->count; ++i) {
-            l->raw[i] = v[c->var - lo + i];
-            l->values[l->desc.stream_count + i] = l->raw[i] - c->base[i];
-        }
+        for (size_t i = 0; i < c->count; ++i)
+            l->values[l->desc.stream_count + i] = v[c->var - lo + i] - c->base[i];
         l->counters_fresh = 1;
         return sl_counters_check(l->desc.counters, v[c->var - lo + c->count]);
     }
@@ -149,8 +146,6 @@ static sluice_status read_values(sluice_loop *l)
         sluice_status st = sluice_counters_read(c, l->values + k);
         if (st != SLUICE_OK)
             return st;
-        for (size_t i = 0; i < c->count; ++i)
-            l->raw[i] = l->values[k + i] + c->base[i];
     }
     return SLUICE_OK;
 }
@@ -201,10 +196,10 @@ sluice_status sluice_loop_run(sluice_loop *l)
             l->pass_cap = cap;
         }
         double t0 = now_seconds();
-        /* each pass counts from zero: from the values just read, which the
-         * device still holds (nothing was queued since), at no command */
+        /* each pass counts from zero: past the counts just read (nothing
+         * was queued since), at no command */
         if (l->desc.reset_counters && l->desc.counters)
-            sl_counters_restart(l->desc.counters, l->raw);
+            sl_counters_advance(l->desc.counters, l->values + l->desc.stream_count);
         st = l->desc.pass(l->desc.user, pass, choice);
         if (st == SLUICE_OK)
             st = read_values(l);
