@@ -536,6 +536,10 @@ typedef struct set_result {
     /* hit agreement over the set's rays: same triangle (or both miss); and
      * same t within 1e-4 */
     double agree_stream, agree_c, agree_emb_tri, agree_emb_t;
+    /* the ratios of each timed round's best frames (stream over fused, fused
+     * over Embree's best): the lowest, the median and the highest, so that
+     * a ratio near its bound shows how far the rounds spread around it */
+    double sf_round[3], fe_round[3];
 } set_result;
 
 typedef struct scene_result {
@@ -639,6 +643,21 @@ static void keep_best(double *best, unsigned round, unsigned f, double s)
         *best = s;
 }
 
+/* The lowest, median and highest of x[0 .. n) (n > 0) into out; sorts x. */
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static void spread3(double *x, unsigned n, double *out)
+{
+    qsort(x, n, sizeof *x, cmp_double);
+    out[0] = x[0];
+    out[1] = n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
+    out[2] = x[n - 1];
+}
+
 /* One trace of the device ray stream, timed. */
 static double sluice_frame(rt_tracer *t, sluice_stream *rays_s, size_t n, sluice_stream *hits_s)
 {
@@ -717,22 +736,41 @@ static void time_peers(const peers *pe, const ray_set *set, unsigned reps, set_r
      * about 7.5 to 5 ms), where Embree's were flat from the first. Round 0
      * is a warm-up; every time is the best frame of the other `reps`
      * rounds. */
+    double *sf = xmalloc(reps * sizeof *sf), *fe = xmalloc(reps * sizeof *fe);
     for (unsigned r = 0; r <= reps; ++r) {
-        for (unsigned f = 0; f < BENCH_BURST; ++f)
-            keep_best(&res->fused_s, r, f, sluice_frame(pe->tf, rays_s, n, hits_f));
-        for (unsigned f = 0; f < BENCH_BURST; ++f)
-            keep_best(&res->stream_s, r, f, sluice_frame(pe->ts, rays_s, n, hits_s));
+        /* this round's best frames (keep_best's round 1 starts afresh) */
+        double rf = 0, rs = 0, re = 1e30;
+        for (unsigned f = 0; f < BENCH_BURST; ++f) {
+            double s = sluice_frame(pe->tf, rays_s, n, hits_f);
+            keep_best(&res->fused_s, r, f, s);
+            keep_best(&rf, 1, f, s);
+        }
+        for (unsigned f = 0; f < BENCH_BURST; ++f) {
+            double s = sluice_frame(pe->ts, rays_s, n, hits_s);
+            keep_best(&res->stream_s, r, f, s);
+            keep_best(&rs, 1, f, s);
+        }
         for (unsigned f = 0; f < BENCH_BURST; ++f)
             keep_best(&res->c_s, r, f, c_frame(&pe->cg, set->rays, n, c_hits));
 #ifdef HAVE_EMBREE
         for (int p = 0; p < 2; ++p)
             for (unsigned th = 1; th <= 2; ++th)
-                for (unsigned f = 0; f < BENCH_BURST; ++f)
-                    keep_best(
-                        &res->emb_s[p][th - 1], r, f,
-                        emb_frame(pe->es, set, pe->w, pe->h, emb.tri, emb.t, emb_packets[p], th));
+                for (unsigned f = 0; f < BENCH_BURST; ++f) {
+                    double s =
+                        emb_frame(pe->es, set, pe->w, pe->h, emb.tri, emb.t, emb_packets[p], th);
+                    keep_best(&res->emb_s[p][th - 1], r, f, s);
+                    re = s < re ? s : re;
+                }
 #endif
+        if (r > 0) {
+            sf[r - 1] = rf / rs;
+            fe[r - 1] = re / rf;
+        }
     }
+    spread3(sf, reps, res->sf_round);
+    spread3(fe, reps, res->fe_round);
+    free(sf);
+    free(fe);
     sluice_hits(hits_f, set->rays, n, &fused);
     sluice_hits(hits_s, set->rays, n, &stream);
     hits_from_rt(set->rays, c_hits, n, &cref);
@@ -1004,7 +1042,8 @@ static void table_legend(void)
 {
     printf("(Emb 1t, 2t: Embree's faster of rtcIntersect1 and rtcIntersect16 on 1 and 2 threads; "
            "f/Emb: fused over Embree's best; s/f: stream over fused; f/C: fused "
-           "over 1-thread C; =: same hit triangle as fused)\n");
+           "over 1-thread C; =: same hit triangle as fused; per round: the ratios of each "
+           "round's best frames, median (lowest-highest))\n");
 }
 
 /* One row of a rays/s table: the set `s` of scene `r`, `count` in the
@@ -1028,6 +1067,15 @@ static void table_row(const scene_result *r, const set_result *s, size_t count)
 }
 
 /* Embree's four variants on the set `s` and its agreement in t. */
+/* The per-round ratios (set_result.sf_round, fe_round), for the detail
+ * lines. */
+static void round_detail(const scene_result *r, const set_result *s)
+{
+    printf("; per round: s/f %.3f (%.3f-%.3f)", s->sf_round[1], s->sf_round[0], s->sf_round[2]);
+    if (r->embree)
+        printf(", f/Emb %.3f (%.3f-%.3f)", s->fe_round[1], s->fe_round[0], s->fe_round[2]);
+}
+
 static void embree_detail(const scene_result *r, const set_result *s)
 {
     if (!r->embree)
@@ -1100,6 +1148,13 @@ static void json_set(FILE *f, const char *indent, const scene_result *r, const s
                 s->emb_best_threads > 1 ? "s" : "");
     else
         fprintf(f, "null");
+    fprintf(f, ", \"stream_over_fused_rounds\": [%.4f, %.4f, %.4f]", s->sf_round[0], s->sf_round[1],
+            s->sf_round[2]);
+    if (r->embree)
+        fprintf(f, ", \"fused_over_embree_rounds\": [%.4f, %.4f, %.4f]", s->fe_round[0],
+                s->fe_round[1], s->fe_round[2]);
+    else
+        fprintf(f, ", \"fused_over_embree_rounds\": null");
     fprintf(f, "},\n");
     fprintf(f,
             "%s\"hit_agreement\": {\"fused_vs_stream\": %.6f, \"fused_vs_c\": %.6f, "
@@ -1227,6 +1282,7 @@ int main(int argc, char **argv)
                r->grid_device_s, r->tracer_create_s[0], r->tracer_create_s[1],
                100 * r->primary.hit_fraction, 100 * r->primary.agree_c);
         embree_detail(r, &r->primary);
+        round_detail(r, &r->primary);
         if (r->embree)
             printf("; Embree BVH %.4f s", r->emb_build_s);
         printf("\n%-11s fused traversal: %s\n", "", r->fused_path);
@@ -1252,8 +1308,10 @@ int main(int argc, char **argv)
                r->name, r->bounce.rays,
                100 * (double)r->bounce.rays / ((double)r->w * (double)r->h),
                100 * r->bounce.hit_fraction, 100 * r->bounce.agree_c);
-        if (r->bounce.rays)
+        if (r->bounce.rays) {
             embree_detail(r, &r->bounce);
+            round_detail(r, &r->bounce);
+        }
         printf("\n");
     }
 
