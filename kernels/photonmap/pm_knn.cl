@@ -289,6 +289,16 @@ pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params *p, uint exact,
             m &= d2 <= (float8)(st->r2);
         if (exact && st->count == p->k)
             m &= d2 < (float8)(st->hd[0]);
+#ifndef PM_SKIP_EMPTY
+        /* Holding k photons (at-least mode), a block is taken as its mask
+         * says, with no branch on whether it holds any photon within the
+         * radius: a coin toss the branch predictor lost often enough to
+         * cost more than the adds (bench/README.md) */
+        if (!exact && st->count >= p->k) {
+            pm_take8(st, p, map, j, m, ar, ag, ab, indices);
+            continue;
+        }
+#endif
         if (!sluice_mask8(m))
             continue;
         if (exact) {
