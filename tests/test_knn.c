@@ -845,6 +845,72 @@ static void test_batches_and_filter(fixture *fx)
     free(b);
 }
 
+/* The cell-ordered copy is made once per build of the grid: a second call
+ * on the same build answers as the first, and photons changed in place and
+ * built again are answered as a fresh search answers them. No queries: no
+ * work, an empty result. */
+static void test_copy_reuse(fixture *fx)
+{
+    sluice_context *ctx = fx->ctx;
+    uint32_t seed = 91;
+    size_t np = 2000, nq = 300;
+    pm_photon *ph = malloc(np * sizeof *ph);
+    pm_query *qs = malloc(nq * sizeof *qs);
+    pm_knn_result *a = malloc(nq * sizeof *a), *b = malloc(nq * sizeof *b),
+                  *c = malloc(nq * sizeof *c);
+    for (size_t i = 0; i < np; ++i)
+        set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
+    random_queries(qs, nq, 0.0f, 1.0f, &seed);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    rt_grid_desc d = desc_of(lo, hi, 6, 6, 6);
+    sluice_stream *sp = NULL, *sq = NULL, *sr = NULL;
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *ph, np, &sp));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *qs, nq, &sq));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *a, nq, &sr));
+    CHECK_OK(ctx, sluice_stream_upload(sp, ph, np));
+    CHECK_OK(ctx, sluice_stream_upload(sq, qs, nq));
+    CHECK_OK(ctx, sr_point_grid_build(fx->grid, &d, sp, sizeof *ph, np, SR_POINT_GRID_COUNT, 0));
+    pm_knn_options o = {24, 0.4f, PM_KNN_ATLEAST, 0, NULL, NULL, 0};
+    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, NULL));
+    CHECK_OK(ctx, sluice_stream_download(sr, a, nq, NULL));
+    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, NULL));
+    CHECK_OK(ctx, sluice_stream_download(sr, b, nq, NULL));
+    CHECK(memcmp(a, b, nq * sizeof *a) == 0, "the same build answered twice differs");
+    /* the photons moved and their power changed, in place, then built again */
+    for (size_t i = 0; i < np; ++i) {
+        ph[i].px = 1.0f - ph[i].px;
+        ph[i].pr *= 2.0f;
+    }
+    CHECK_OK(ctx, sluice_stream_upload(sp, ph, np));
+    CHECK_OK(ctx, sr_point_grid_build(fx->grid, &d, sp, sizeof *ph, np, SR_POINT_GRID_COUNT, 0));
+    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, NULL));
+    CHECK_OK(ctx, sluice_stream_download(sr, b, nq, NULL));
+    pm_knn *fresh = NULL;
+    CHECK_OK(ctx, pm_knn_create(ctx, &fresh));
+    if (fresh) {
+        CHECK_OK(ctx, pm_knn_query(fresh, fx->grid, sp, sq, nq, sr, &o, NULL));
+        CHECK_OK(ctx, sluice_stream_download(sr, c, nq, NULL));
+        CHECK(memcmp(b, c, nq * sizeof *b) == 0,
+              "after a new build the search answers otherwise than a fresh one");
+    }
+    CHECK(memcmp(a, b, nq * sizeof *a) != 0, "moved photons, the same answers");
+    pm_knn_stats st;
+    size_t len = 1;
+    CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, 0, sr, &o, &st));
+    CHECK_OK(ctx, sluice_stream_length(sr, &len));
+    CHECK(len == 0 && st.queries == 0 && st.passes == 0,
+          "no queries: length %zu, %zu queries, %u passes", len, st.queries, st.passes);
+    pm_knn_destroy(fresh);
+    sluice_stream_destroy(sp);
+    sluice_stream_destroy(sq);
+    sluice_stream_destroy(sr);
+    free(ph);
+    free(qs);
+    free(a);
+    free(b);
+    free(c);
+}
+
 /* The pass hook: one call per pass, each query's count never falls from
  * one pass to the next and ends at the final result; batches of the exact
  * mode say how many results are current; a failing hook stops the search
@@ -1027,6 +1093,7 @@ int main(void)
         test_hash_errors(&fx);
         test_radius(&fx);
         test_batches_and_filter(&fx);
+        test_copy_reuse(&fx);
         test_pass_hook(&fx);
         test_cases(&fx);
     }

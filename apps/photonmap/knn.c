@@ -68,9 +68,16 @@ struct pm_knn {
     sluice_loop *loop;
     /* scratch kept between calls; streams only grow */
     sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
-    sluice_stream *map, *map_start;    /* the cell-ordered copy of the photons */
-    sluice_stream *box;                /* its bounding box: lo xyz, hi xyz */
-    sluice_stream *sat;                /* summed counts: skips shells without photons */
+    sluice_stream *map, *map_start; /* the cell-ordered copy of the photons */
+    sluice_stream *box;             /* its bounding box: lo xyz, hi xyz */
+    sluice_stream *sat;             /* summed counts: skips shells without photons */
+    /* what the copy, its box and the summed counts were made from: a call
+     * with the same grid build and photons reuses them (copy_made) */
+    int copy_made;
+    const sr_point_grid *copy_grid;
+    uint64_t copy_build;
+    sluice_stream *copy_photons;
+    float copy_box[6];
     sluice_stream *order_keys, *order; /* the search order: queries by cell */
     sluice_stream *qsorted, *rsorted;  /* queries and results in that order */
     /* the current call's pass hook */
@@ -393,6 +400,17 @@ static sluice_status query_hashed(pm_knn *knn, const sr_point_grid_view *v,
     return SLUICE_OK;
 }
 
+/* Notes what the cell-ordered copy, its box and the summed counts were
+ * made from (query reuses them while these stay the same). */
+static void copy_made(pm_knn *knn, const sr_point_grid *grid, const sr_point_grid_view *v,
+                      sluice_stream *photons)
+{
+    knn->copy_made = 1;
+    knn->copy_grid = grid;
+    knn->copy_build = v->build;
+    knn->copy_photons = photons;
+}
+
 static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,
                            sluice_stream *queries, size_t n, sluice_stream *results,
                            const pm_knn_options *o, sluice_stream *indices, uint32_t cap,
@@ -439,6 +457,17 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     }
     if (st != SLUICE_OK)
         return st;
+    if (n == 0) {
+        /* nothing to search: the map is not even copied */
+        st = sluice_stream_set_length(results, 0);
+        if (st == SLUICE_OK && indices)
+            st = sluice_stream_set_length(indices, 0);
+        if (st != SLUICE_OK)
+            return FAIL(knn, st, "kNN: %s", sluice_context_error(knn->ctx));
+        if (stats)
+            stats->seconds = now() - t0;
+        return SLUICE_OK;
+    }
 
     uint32_t exact = o->mode == PM_KNN_EXACT;
     size_t batch = n ? n : 1;
@@ -462,6 +491,9 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         goto runtime_fail;
 
     step = "copying the map in cell order";
+    const int reuse = knn->copy_made && knn->copy_grid == grid && knn->copy_build == v.build &&
+                      knn->copy_photons == photons;
+    knn->copy_made = reuse; /* made again below otherwise */
     sr_point_grid_stats gs;
     st = sr_point_grid_statistics(grid, &gs);
     /* room for the blocks the search reads past the last photon */
@@ -470,45 +502,47 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st == SLUICE_OK && stride * PM_MAP_PLANES > UINT32_MAX)
         return FAIL(knn, SLUICE_ERROR_LIMIT, "kNN: %zu photons are more than the map's %u",
                     gs.stored, (unsigned)(UINT32_MAX / PM_MAP_PLANES - 2 * PM_MAP_BLOCK));
-    if (st == SLUICE_OK)
+    if (st == SLUICE_OK && !reuse)
         st = ensure(knn->ctx, &knn->map, sizeof(float), stride * PM_MAP_PLANES);
     /* cells back to back in cell order, so that a run of cells along x is
      * one run of photons (the stencil build's footprints have gaps, and the
      * bitonic build's starts of empty cells are not needed to be in order) */
     sluice_stream *map_start = knn->map_start;
-    if (st == SLUICE_OK)
+    if (st == SLUICE_OK && !reuse)
         st = ensure(knn->ctx, &knn->map_start, 4, v.cells);
-    if (st == SLUICE_OK) {
+    if (st == SLUICE_OK && !reuse) {
         map_start = knn->map_start;
         st = sluice_scan(knn->ctx, v.cell_count, map_start, SLUICE_U32, 0, NULL);
     }
-    sluice_stream *gather_in[] = {v.order,   v.cell_start, v.cell_count, v.cell_arrived,
-                                  map_start, photons,      knn->map};
-    for (unsigned i = 0; st == SLUICE_OK && i < 7; ++i)
-        st = sluice_kernel_set_stream(knn->k_gather, i, gather_in[i], 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_arg(knn->k_gather, 7, sizeof stride32, &stride32);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_launch_count(knn->k_gather, v.cells);
-    if (st == SLUICE_OK)
-        st = sluice_stream_set_length(knn->map, stride * PM_MAP_PLANES);
+    if (!reuse) {
+        sluice_stream *gather_in[] = {v.order,   v.cell_start, v.cell_count, v.cell_arrived,
+                                      map_start, photons,      knn->map};
+        for (unsigned i = 0; st == SLUICE_OK && i < 7; ++i)
+            st = sluice_kernel_set_stream(knn->k_gather, i, gather_in[i], 0);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_arg(knn->k_gather, 7, sizeof stride32, &stride32);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_launch_count(knn->k_gather, v.cells);
+        if (st == SLUICE_OK)
+            st = sluice_stream_set_length(knn->map, stride * PM_MAP_PLANES);
+    }
     /* the photons' box bounds every distance: queries far from all photons
      * (on the walls over glassball's floor) end at once */
     uint32_t stored32 = (uint32_t)gs.stored;
-    float box[6];
-    if (st == SLUICE_OK)
+    float *box = knn->copy_box;
+    if (st == SLUICE_OK && !reuse)
         st = sluice_kernel_set_stream(knn->k_bounds, 0, knn->map, 0);
-    if (st == SLUICE_OK)
+    if (st == SLUICE_OK && !reuse)
         st = sluice_kernel_set_arg(knn->k_bounds, 1, sizeof stride32, &stride32);
-    if (st == SLUICE_OK)
+    if (st == SLUICE_OK && !reuse)
         st = sluice_kernel_set_arg(knn->k_bounds, 2, sizeof stored32, &stored32);
-    if (st == SLUICE_OK)
+    if (st == SLUICE_OK && !reuse)
         st = sluice_kernel_set_stream(knn->k_bounds, 3, knn->box, 0);
-    if (st == SLUICE_OK)
+    if (st == SLUICE_OK && !reuse)
         st = sluice_kernel_launch_count(knn->k_bounds, 6);
-    if (st == SLUICE_OK)
+    if (st == SLUICE_OK && !reuse)
         st = sluice_stream_set_length(knn->box, 6);
-    if (st == SLUICE_OK)
+    if (st == SLUICE_OK && !reuse)
         st = sluice_stream_download(knn->box, box, 6, NULL);
     if (st != SLUICE_OK)
         goto runtime_fail;
@@ -518,15 +552,18 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     params_make(&v, o, indices ? cap : 0u, stride32, &g, &p);
     memcpy(p.box_lo, box, sizeof p.box_lo);
     memcpy(p.box_hi, box + 3, sizeof p.box_hi);
-    if (hashed)
+    if (hashed) {
+        copy_made(knn, grid, &v, photons);
         return query_hashed(knn, &v, map_start, queries, n, results, o, &p, indices, cap, stats,
                             t0);
+    }
 
     step = "summing the cell counts";
-    st = ensure(knn->ctx, &knn->sat, 4, v.cells);
-    if (st == SLUICE_OK)
+    if (!reuse)
+        st = ensure(knn->ctx, &knn->sat, 4, v.cells);
+    if (st == SLUICE_OK && !reuse)
         st = sluice_kernel_set_stream(knn->k_sat[0], 0, v.cell_count, 0);
-    for (int a = 0; st == SLUICE_OK && a < 3; ++a) {
+    for (int a = 0; st == SLUICE_OK && !reuse && a < 3; ++a) {
         sluice_kernel *ks = knn->k_sat[a];
         unsigned first = a == 0 ? 1u : 0u;
         /* lines across the axis: the product of the other two sides */
@@ -539,6 +576,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     }
     if (st != SLUICE_OK)
         goto runtime_fail;
+    copy_made(knn, grid, &v, photons);
 
     step = "ordering the queries by cell";
     st = ensure(knn->ctx, &knn->order_keys, 4, n);

@@ -149,6 +149,12 @@ void pm_knn_destroy(pm_knn *knn);
  * options, a hashed grid with a mode other than PM_KNN_RADIUS or an
  * infinite max_radius; the runtime's errors otherwise. pm_knn_error says
  * why.
+ *
+ * The search reads the photons through a copy in cell order that it makes
+ * once per build of the grid: later calls with the same grid, unchanged
+ * since (sr_point_grid_view.build), and the same photon stream reuse it (a
+ * frame's waves of queries, the samples of a map traced once). Photons
+ * changed in place must be followed by a new build of the grid.
  */
 sluice_status pm_knn_query(pm_knn *knn, const sr_point_grid *grid, sluice_stream *photons,
                            sluice_stream *queries, size_t n, sluice_stream *results,

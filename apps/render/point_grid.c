@@ -52,6 +52,7 @@ struct sr_point_grid {
     sr_point_grid_view view;
     sr_point_grid_stats stats;
     int built;
+    uint64_t builds; /* build calls so far (sr_point_grid_view.build) */
     char message[512];
 };
 
@@ -551,6 +552,7 @@ sluice_status sr_point_grid_build(sr_point_grid *g, const rt_grid_desc *desc, sl
 {
     if (!g)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    g->builds++;
     if (!desc) {
         memset(&g->view, 0, sizeof g->view);
         memset(&g->stats, 0, sizeof g->stats);
@@ -566,6 +568,7 @@ sluice_status sr_point_grid_build_hashed(sr_point_grid *g, const sr_point_hash_d
 {
     if (!g)
         return SLUICE_ERROR_INVALID_ARGUMENT;
+    g->builds++;
     if (!desc) {
         memset(&g->view, 0, sizeof g->view);
         memset(&g->stats, 0, sizeof g->stats);
@@ -580,6 +583,7 @@ sluice_status sr_point_grid_get(const sr_point_grid *g, sr_point_grid_view *view
     if (!g || !view)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     *view = g->view;
+    view->build = g->builds;
     return SLUICE_OK;
 }
 

@@ -150,6 +150,9 @@ typedef struct sr_point_grid_view {
     sluice_stream *cell_start;   /**< uint32, cells (buckets) + 1 records */
     sluice_stream *cell_count;   /**< uint32, cells (buckets) records */
     sluice_stream *cell_arrived; /**< uint32, cells (buckets) records */
+    uint64_t build; /**< changes with every build call: what a search derived from the grid
+                         and its points (the kNN search's cell-ordered copy) is current while
+                         this stays the same */
 } sr_point_grid_view;
 
 typedef struct sr_point_grid sr_point_grid;
