@@ -773,26 +773,55 @@ static void test_hash_errors(fixture *fx)
 
 /* Exact mode in batches (k large enough that the heaps of all queries do
  * not fit PM_KNN_EXACT_HEAP_BYTES), and the normal filter. */
+/* np random photons in the unit cube and nq random queries in [qlo, qhi]^3,
+ * uploaded into new streams (with a result stream for nq), and the grid
+ * built over them with n^3 cells (a count build). */
+typedef struct unit_set {
+    pm_photon *ph;
+    pm_query *qs;
+    sluice_stream *sp, *sq, *sr;
+} unit_set;
+
+static void unit_set_make(fixture *fx, uint32_t seed, size_t np, size_t nq, float qlo, float qhi,
+                          uint32_t n, unit_set *u)
+{
+    sluice_context *ctx = fx->ctx;
+    u->ph = malloc(np * sizeof *u->ph);
+    u->qs = malloc(nq * sizeof *u->qs);
+    u->sp = u->sq = u->sr = NULL;
+    for (size_t i = 0; i < np; ++i)
+        set_photon(&u->ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
+    random_queries(u->qs, nq, qlo, qhi, &seed);
+    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    rt_grid_desc d = desc_of(lo, hi, n, n, n);
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *u->ph, np, &u->sp));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *u->qs, nq, &u->sq));
+    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof(pm_knn_result), nq, &u->sr));
+    CHECK_OK(ctx, sluice_stream_upload(u->sp, u->ph, np));
+    CHECK_OK(ctx, sluice_stream_upload(u->sq, u->qs, nq));
+    CHECK_OK(ctx,
+             sr_point_grid_build(fx->grid, &d, u->sp, sizeof *u->ph, np, SR_POINT_GRID_COUNT, 0));
+}
+
+static void unit_set_free(unit_set *u)
+{
+    sluice_stream_destroy(u->sp);
+    sluice_stream_destroy(u->sq);
+    sluice_stream_destroy(u->sr);
+    free(u->ph);
+    free(u->qs);
+}
+
 static void test_batches_and_filter(fixture *fx)
 {
     sluice_context *ctx = fx->ctx;
-    uint32_t seed = 77;
     size_t np = 3000, nq = 700;
-    pm_photon *ph = malloc(np * sizeof *ph);
-    pm_query *qs = malloc(nq * sizeof *qs);
+    unit_set u;
+    unit_set_make(fx, 77, np, nq, 0.0f, 1.0f, 8, &u);
+    pm_photon *ph = u.ph;
+    pm_query *qs = u.qs;
+    sluice_stream *sp = u.sp, *sq = u.sq, *sr = u.sr;
     pm_knn_result *a = malloc(nq * sizeof *a), *b = malloc(nq * sizeof *b);
-    for (size_t i = 0; i < np; ++i)
-        set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
-    random_queries(qs, nq, 0.0f, 1.0f, &seed);
-    const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
-    rt_grid_desc d = desc_of(lo, hi, 8, 8, 8);
-    sluice_stream *sp = NULL, *sq = NULL, *sr = NULL;
-    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *ph, np, &sp));
-    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *qs, nq, &sq));
-    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *a, nq, &sr));
-    CHECK_OK(ctx, sluice_stream_upload(sp, ph, np));
-    CHECK_OK(ctx, sluice_stream_upload(sq, qs, nq));
-    CHECK_OK(ctx, sr_point_grid_build(fx->grid, &d, sp, sizeof *ph, np, SR_POINT_GRID_COUNT, 0));
     /* k = 2^18: 2 MiB of heap per query, 32 queries per batch */
     pm_knn_options o = {1u << 18, 0.3f, PM_KNN_EXACT, 0, NULL, NULL, 0};
     pm_knn_stats st;
@@ -836,11 +865,7 @@ static void test_batches_and_filter(fixture *fx)
         }
         CHECK(bad == 0, "normal filter, mode %d: %zu queries wrong", m, bad);
     }
-    sluice_stream_destroy(sp);
-    sluice_stream_destroy(sq);
-    sluice_stream_destroy(sr);
-    free(ph);
-    free(qs);
+    unit_set_free(&u);
     free(a);
     free(b);
 }
@@ -852,24 +877,15 @@ static void test_batches_and_filter(fixture *fx)
 static void test_copy_reuse(fixture *fx)
 {
     sluice_context *ctx = fx->ctx;
-    uint32_t seed = 91;
     size_t np = 2000, nq = 300;
-    pm_photon *ph = malloc(np * sizeof *ph);
-    pm_query *qs = malloc(nq * sizeof *qs);
+    unit_set u;
+    unit_set_make(fx, 91, np, nq, 0.0f, 1.0f, 6, &u);
+    pm_photon *ph = u.ph;
+    sluice_stream *sp = u.sp, *sq = u.sq, *sr = u.sr;
     pm_knn_result *a = malloc(nq * sizeof *a), *b = malloc(nq * sizeof *b),
                   *c = malloc(nq * sizeof *c);
-    for (size_t i = 0; i < np; ++i)
-        set_photon(&ph[i], frand(&seed), frand(&seed), frand(&seed), &seed);
-    random_queries(qs, nq, 0.0f, 1.0f, &seed);
     const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
     rt_grid_desc d = desc_of(lo, hi, 6, 6, 6);
-    sluice_stream *sp = NULL, *sq = NULL, *sr = NULL;
-    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *ph, np, &sp));
-    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *qs, nq, &sq));
-    CHECK_OK(ctx, sluice_stream_create(ctx, sizeof *a, nq, &sr));
-    CHECK_OK(ctx, sluice_stream_upload(sp, ph, np));
-    CHECK_OK(ctx, sluice_stream_upload(sq, qs, nq));
-    CHECK_OK(ctx, sr_point_grid_build(fx->grid, &d, sp, sizeof *ph, np, SR_POINT_GRID_COUNT, 0));
     pm_knn_options o = {24, 0.4f, PM_KNN_ATLEAST, 0, NULL, NULL, 0};
     CHECK_OK(ctx, pm_knn_query(fx->knn, fx->grid, sp, sq, nq, sr, &o, NULL));
     CHECK_OK(ctx, sluice_stream_download(sr, a, nq, NULL));
@@ -901,11 +917,7 @@ static void test_copy_reuse(fixture *fx)
     CHECK(len == 0 && st.queries == 0 && st.passes == 0,
           "no queries: length %zu, %zu queries, %u passes", len, st.queries, st.passes);
     pm_knn_destroy(fresh);
-    sluice_stream_destroy(sp);
-    sluice_stream_destroy(sq);
-    sluice_stream_destroy(sr);
-    free(ph);
-    free(qs);
+    unit_set_free(&u);
     free(a);
     free(b);
     free(c);
