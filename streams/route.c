@@ -7,22 +7,24 @@
 #include "common.h"
 #include "sluice/streams.h"
 
-sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, sluice_stream *values,
-                                   uint32_t bucket_count, uint32_t slots, sluice_stream *out,
-                                   sluice_stream *fill, sluice_stream *overflow)
+/* Both forms; `fn` names the caller in messages; `mark`: unused places
+ * get 0xffffffff. */
+static sluice_status route(sluice_context *ctx, const char *fn, int mark, sluice_stream *keys,
+                           sluice_stream *values, uint32_t bucket_count, uint32_t slots,
+                           sluice_stream *out, sluice_stream *fill, sluice_stream *overflow)
 {
     if (!ctx)
         return SLUICE_ERROR_INVALID_ARGUMENT;
     sl_clear_error(ctx);
-    sluice_status st = sl_check_u32_stream(ctx, keys, "sluice_route_bounded", "keys", NULL);
+    sluice_status st = sl_check_u32_stream(ctx, keys, fn, "keys", NULL);
     if (st == SLUICE_OK)
-        st = sl_check_u32_stream(ctx, values, "sluice_route_bounded", "values", NULL);
+        st = sl_check_u32_stream(ctx, values, fn, "values", NULL);
     if (st == SLUICE_OK)
-        st = sl_check_u32_stream(ctx, out, "sluice_route_bounded", "out", NULL);
+        st = sl_check_u32_stream(ctx, out, fn, "out", NULL);
     if (st == SLUICE_OK)
-        st = sl_check_u32_stream(ctx, fill, "sluice_route_bounded", "fill", NULL);
+        st = sl_check_u32_stream(ctx, fill, fn, "fill", NULL);
     if (st == SLUICE_OK)
-        st = sl_check_u32_stream(ctx, overflow, "sluice_route_bounded", "overflow", NULL);
+        st = sl_check_u32_stream(ctx, overflow, fn, "overflow", NULL);
     if (st != SLUICE_OK)
         return st;
     /* The outputs are written while the inputs are read: no sharing. */
@@ -31,31 +33,29 @@ sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, slu
         for (int b = a + 1; b < 5; ++b)
             if (all[a] == all[b] && b >= 2)
                 return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                               "sluice_route_bounded: an output stream is also another argument");
+                               "%s: an output stream is also another argument", fn);
     size_t total = (size_t)bucket_count * slots;
     if ((uint64_t)bucket_count * slots > 0xfffffff0u || out->capacity < total)
         return sl_fail(ctx, SLUICE_ERROR_OVERFLOW,
-                       "sluice_route_bounded: out holds %zu records but %u buckets x %u slots are "
-                       "needed",
+                       "%s: out holds %zu records but %u buckets x %u slots are needed", fn,
                        out->capacity, bucket_count, slots);
     if (fill->capacity < bucket_count || overflow->capacity < bucket_count)
-        return sl_fail(ctx, SLUICE_ERROR_OVERFLOW,
-                       "sluice_route_bounded: fill and overflow need %u records each",
+        return sl_fail(ctx, SLUICE_ERROR_OVERFLOW, "%s: fill and overflow need %u records each", fn,
                        bucket_count);
     size_t n = 0, nv = 0;
-    st = sl_check_u32_stream(ctx, keys, "sluice_route_bounded", "keys", &n);
+    st = sl_check_u32_stream(ctx, keys, fn, "keys", &n);
     if (st == SLUICE_OK)
-        st = sl_check_u32_stream(ctx, values, "sluice_route_bounded", "values", &nv);
+        st = sl_check_u32_stream(ctx, values, fn, "values", &nv);
     if (st != SLUICE_OK)
         return st;
     if (nv < n)
-        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT,
-                       "sluice_route_bounded: %zu values for %zu keys", nv, n);
+        return sl_fail(ctx, SLUICE_ERROR_INVALID_ARGUMENT, "%s: %zu values for %zu keys", fn, nv,
+                       n);
 
     cl_kernel k_scatter = NULL, k_finish = NULL;
     cl_uint nn = (cl_uint)n, none = 0xffffffffu, zero = 0;
     cl_int err = CL_SUCCESS;
-    if (total)
+    if (total && mark)
         err = clEnqueueFillBuffer(ctx->queue, out->mem, &none, sizeof none, 0,
                                   total * sizeof(cl_uint), 0, NULL, NULL);
     if (err == CL_SUCCESS && bucket_count)
@@ -96,4 +96,21 @@ sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, slu
     if (k_finish)
         clReleaseKernel(k_finish);
     return st;
+}
+
+sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, sluice_stream *values,
+                                   uint32_t bucket_count, uint32_t slots, sluice_stream *out,
+                                   sluice_stream *fill, sluice_stream *overflow)
+{
+    return route(ctx, "sluice_route_bounded", 1, keys, values, bucket_count, slots, out, fill,
+                 overflow);
+}
+
+sluice_status sluice_route_bounded_sparse(sluice_context *ctx, sluice_stream *keys,
+                                          sluice_stream *values, uint32_t bucket_count,
+                                          uint32_t slots, sluice_stream *out, sluice_stream *fill,
+                                          sluice_stream *overflow)
+{
+    return route(ctx, "sluice_route_bounded_sparse", 0, keys, values, bucket_count, slots, out,
+                 fill, overflow);
 }

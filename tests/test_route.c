@@ -1,14 +1,19 @@
 /* Tests of bounded routing (Purcell 6.2.2 stencil routing): exact fill and
  * overflow counts against a C reference; each bucket's stored payloads are
  * distinct payloads of records sent to that bucket, as many as its fill; the
- * unused places are 0xffffffff; and the error paths. */
+ * unused places are 0xffffffff, or (the sparse form) keep what they held;
+ * and the error paths. */
 #include "check.h"
 #include "sluice/streams.h"
 
 #include <string.h>
 
-static void run_case(sluice_context *ctx, size_t n, uint32_t buckets, uint32_t slots,
-                     uint32_t key_range)
+/* What the sparse form's unused places hold before (and so after) it:
+ * never a payload of these tests (below 1000 + 2^24). */
+#define UNTOUCHED 0x5e5e5e5eu
+
+static void run_case_as(sluice_context *ctx, size_t n, uint32_t buckets, uint32_t slots,
+                        uint32_t key_range, int sparse)
 {
     size_t total = (size_t)buckets * slots;
     uint32_t *k = malloc((n + 1) * sizeof *k), *v = malloc((n + 1) * sizeof *v);
@@ -33,7 +38,13 @@ static void run_case(sluice_context *ctx, size_t n, uint32_t buckets, uint32_t s
     CHECK_OK(ctx, sluice_stream_create(ctx, 4, buckets, &sov));
     CHECK_OK(ctx, sluice_stream_upload(sk, k, n));
     CHECK_OK(ctx, sluice_stream_upload(sv, v, n));
-    CHECK_OK(ctx, sluice_route_bounded(ctx, sk, sv, buckets, slots, so, sf, sov));
+    if (sparse) {
+        const uint32_t u = UNTOUCHED;
+        CHECK_OK(ctx, sluice_stream_fill(so, &u, total + 2));
+        CHECK_OK(ctx, sluice_route_bounded_sparse(ctx, sk, sv, buckets, slots, so, sf, sov));
+    } else {
+        CHECK_OK(ctx, sluice_route_bounded(ctx, sk, sv, buckets, slots, so, sf, sov));
+    }
     size_t c1 = 0, c2 = 0, c3 = 0;
     CHECK_OK(ctx, sluice_stream_download(so, out, total, &c1));
     CHECK_OK(ctx, sluice_stream_download(sf, fill, buckets, &c2));
@@ -47,7 +58,7 @@ static void run_case(sluice_context *ctx, size_t n, uint32_t buckets, uint32_t s
         for (uint32_t q = 0; q < slots; ++q) {
             uint32_t x = out[(size_t)b * slots + q];
             if (q >= f) {
-                bad_slots += x != 0xffffffffu;
+                bad_slots += x != (sparse ? UNTOUCHED : 0xffffffffu);
                 continue;
             }
             /* A payload of a record sent to b, stored once. */
@@ -60,8 +71,8 @@ static void run_case(sluice_context *ctx, size_t n, uint32_t buckets, uint32_t s
     }
     CHECK(bad_counts == 0, "n=%zu buckets=%u slots=%u: %zu buckets with wrong counts", n, buckets,
           slots, bad_counts);
-    CHECK(bad_slots == 0, "n=%zu buckets=%u slots=%u: %zu wrong places", n, buckets, slots,
-          bad_slots);
+    CHECK(bad_slots == 0, "n=%zu buckets=%u slots=%u%s: %zu wrong places", n, buckets, slots,
+          sparse ? " (sparse)" : "", bad_slots);
     sluice_stream_destroy(sk);
     sluice_stream_destroy(sv);
     sluice_stream_destroy(so);
@@ -74,6 +85,14 @@ static void run_case(sluice_context *ctx, size_t n, uint32_t buckets, uint32_t s
     free(fill);
     free(ovf);
     free(used);
+}
+
+/* The case in both forms. */
+static void run_case(sluice_context *ctx, size_t n, uint32_t buckets, uint32_t slots,
+                     uint32_t key_range)
+{
+    run_case_as(ctx, n, buckets, slots, key_range, 0);
+    run_case_as(ctx, n, buckets, slots, key_range, 1);
 }
 
 static void test_errors(sluice_context *ctx)

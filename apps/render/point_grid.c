@@ -290,13 +290,15 @@ static sluice_status finish_compact(sr_point_grid *g, uint32_t cells)
 }
 
 /* STENCIL: bounded routing, then the deterministic refill of overfull
- * cells. */
+ * cells. A cell's places past its count are never read: the routing leaves
+ * them unwritten (sparse), so that the footprint of the empty cells, most
+ * of a photon map's, costs nothing. */
 static sluice_status build_stencil(sr_point_grid *g, size_t n, uint32_t cells, uint32_t slots)
 {
     /* fill goes to count and overflow to arrived; pg_finish_stencil turns
      * them into stored and arrived counts in place */
-    sluice_status st = sluice_route_bounded(g->ctx, g->keys, g->values, cells, slots, g->order,
-                                            g->count, g->arrived);
+    sluice_status st = sluice_route_bounded_sparse(g->ctx, g->keys, g->values, cells, slots,
+                                                   g->order, g->count, g->arrived);
     sluice_kernel *k = g->k_finish_stencil;
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 0, g->order, 0);

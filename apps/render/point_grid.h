@@ -20,7 +20,7 @@
  *   BITONIC  Purcell Fig. 6.4: (cell, index) pairs sorted with
  *            sluice_sort_bitonic, cell starts by sluice_cell_index_search.
  *   STENCIL  Purcell's stencil routing: at most `slots` points per cell,
- *            routed by sluice_route_bounded into fixed footprints
+ *            routed by sluice_route_bounded_sparse into fixed footprints
  *            (cell_start[c] = c * slots). Deterministic: an overfull cell
  *            keeps its `slots` lowest point indices, which is what Purcell's
  *            stencil keeps when photons are drawn in index order.

@@ -120,6 +120,16 @@ sluice_status sluice_route_bounded(sluice_context *ctx, sluice_stream *keys, slu
                                    uint32_t bucket_count, uint32_t slots, sluice_stream *out,
                                    sluice_stream *fill, sluice_stream *overflow);
 
+/** sluice_route_bounded without the marks: only bucket b's first fill[b]
+ *  places are written, the others keep what they held. Its cost is the
+ *  places filled, not the footprint: a few occupied buckets of many (a
+ *  photon map's cells, most of them empty) touch a few pages of `out`,
+ *  where marking every place writes all of it. */
+sluice_status sluice_route_bounded_sparse(sluice_context *ctx, sluice_stream *keys,
+                                          sluice_stream *values, uint32_t bucket_count,
+                                          uint32_t slots, sluice_stream *out, sluice_stream *fill,
+                                          sluice_stream *overflow);
+
 #ifdef __cplusplus
 }
 #endif
