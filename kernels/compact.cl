@@ -80,14 +80,13 @@ __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint
     SLUICE_FOR_EACH_BLOCK(b, e)
     {
         uint i = b;
-        if (e - b == 4u && (b & 3u) == 0u) {
-            uint4 f = *(global const uint4 *)(flags + b);
+        for (; i + 4u <= e && (i & 3u) == 0u; i += 4u) {
+            uint4 f = *(global const uint4 *)(flags + i);
             uint m = sluice_mask4(f != (uint4)0u);
             uint4 x = (uint4)0u; /* read where some are kept, in the pass that writes */
             if (m && SLUICE_WRITING)
-                x = *(global const uint4 *)(in + b);
+                x = *(global const uint4 *)(in + i);
             SLUICE_EMIT4(0, out, x, m);
-            i = e;
         }
         for (; i < e; ++i)
             SLUICE_EMIT_IF(0, out, in[i], flags[i] != 0u);
@@ -254,12 +253,11 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
         SLUICE_FOR_EACH_BLOCK(b, e)                                                                \
         {                                                                                          \
             uint i = b;                                                                            \
-            if (e - b == 4u && (b & 3u) == 0u) {                                                   \
-                uint4 x = *(global const uint4 *)(in + b);                                         \
+            for (; i + 4u <= e && (i & 3u) == 0u; i += 4u) {                                       \
+                uint4 x = *(global const uint4 *)(in + i);                                         \
                 uint m = sluice_mask4(AS4(x) < (T##4)t);                                           \
                 SLUICE_EMIT4(0, below, x, m);                                                      \
                 SLUICE_EMIT4(1, above, x, ~m);                                                     \
-                i = e;                                                                             \
             }                                                                                      \
             for (; i < e; ++i)                                                                     \
                 PARTITION_ONE_(AS1);                                                               \

@@ -300,8 +300,14 @@ SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
 #define SLUICE_FORM_RANGE_ 1
 #define SLUICE_FORM_BLOCK_ 2
 
-/* Records per block of SLUICE_FOR_EACH_BLOCK in the interleaved layout. */
+/* Records per block of SLUICE_FOR_EACH_BLOCK in the interleaved layout.
+ * Group order scans its counts once per block (a step), so longer blocks
+ * scan less often and read less side by side; -DSLUICE_BLOCK=16 in
+ * SLUICE_BUILD_OPTIONS measures the trade (bench/lent_machine.sh
+ * gpu-block-ab). A multiple of 4. */
+#ifndef SLUICE_BLOCK
 #define SLUICE_BLOCK 4u
+#endif
 
 /* The records of this work-item. Contiguous chunks (the range form, or a
  * launch without `interleave`): work-item i takes [i chunk, (i + 1) chunk),
@@ -597,14 +603,14 @@ SLUICE_INLINE_ uint sluice_advance_(sluice_state_ *s, uint id)
 /* The block form of SLUICE_FOR_EACH, for bodies that take a few records at a
  * time as one vector on GPUs: the body runs on blocks of consecutive
  * records [b, e) of this work-item, in increasing order. In the interleaved
- * layout (GPUs) a block holds SLUICE_BLOCK (4) records, fewer at the end of
- * the input, and the blocks of a work-group's work-items lie side by side,
- * so that their vector loads are coalesced; b is then a multiple of 4 when
- * the work-group size is (a block of 4-byte records starts on a 16-byte
- * boundary). Elsewhere the body runs once per pass on the whole chunk, as
- * in SLUICE_FOR_EACH_RANGE. A body loops over [b, e) itself and handles any
- * length; SLUICE_EMIT4 emits 4 records from a vector. The rules above hold
- * per record. */
+ * layout (GPUs) a block holds SLUICE_BLOCK (4, or another multiple of 4)
+ * records, fewer at the end of the input, and the blocks of a work-group's
+ * work-items lie side by side, so that their vector loads are coalesced; b
+ * is then a multiple of 4 when the work-group size is (a block of 4-byte
+ * records starts on a 16-byte boundary). Elsewhere the body runs once per
+ * pass on the whole chunk, as in SLUICE_FOR_EACH_RANGE. A body loops over
+ * [b, e) itself and handles any length; SLUICE_EMIT4 emits 4 records from
+ * a vector. The rules above hold per record. */
 #define SLUICE_FOR_EACH_BLOCK(b, e)                                                                \
     SLUICE_PASSES_(SLUICE_FORM_BLOCK_)                                                             \
     for (uint b = sluice_s_.begin, e = min(b + sluice_s_.blk, sluice_s_.end); b < sluice_s_.uend;  \
