@@ -66,8 +66,24 @@ inline void rt_area_light_point8(float8 u0, float8 u1, uint count, global const 
     float8 ur = select((float8)(0.5f), clamp((u0 - below) / width, 0.0f, 1.0f), width > 0.0f);
     uint8 t = RT_GATHER8_(uint8, area_tris, lo), at = t * 9u;
     float8 v[9];
-    for (uint j = 0; j < 9u; ++j)
-        v[j] = RT_GATHER8_(float8, tv + j, at);
+#ifndef RT_LIGHT_GATHER
+    /* The lanes' triangles: a scene's lights are often a few triangles (the
+     * Cornell box's two), so the 8 lanes hold one or two of them, whose 9
+     * floats are read once each and broadcast; more than two take a gather
+     * per float (gathers were half of this function's time on cornell) */
+    uint ts[8];
+    vstore8(t, 0, ts);
+    uint ta = ts[0], tb = ta;
+    for (uint l = 1u; l < 8u; ++l)
+        tb = tb == ta ? ts[l] : tb;
+    int8 on_b = t == (uint8)(tb);
+    if (!any(t != (uint8)(ta) & ~on_b)) {
+        for (uint j = 0; j < 9u; ++j)
+            v[j] = select((float8)(tv[ta * 9u + j]), (float8)(tv[tb * 9u + j]), on_b);
+    } else
+#endif
+        for (uint j = 0; j < 9u; ++j)
+            v[j] = RT_GATHER8_(float8, tv + j, at);
 #ifdef RT_WATERTIGHT
     for (int a = 0; a < 3; ++a) {
         v[3 + a] -= v[a];
