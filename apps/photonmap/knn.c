@@ -402,7 +402,7 @@ static sluice_status query_hashed(pm_knn *knn, const sr_point_grid_view *v,
 
 /* Notes what the cell-ordered copy, its box and the summed counts were
  * made from (query reuses them while these stay the same). */
-static void copy_made(pm_knn *knn, const sr_point_grid *grid, const sr_point_grid_view *v,
+static void note_copy(pm_knn *knn, const sr_point_grid *grid, const sr_point_grid_view *v,
                       sluice_stream *photons)
 {
     knn->copy_made = 1;
@@ -553,7 +553,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     memcpy(p.box_lo, box, sizeof p.box_lo);
     memcpy(p.box_hi, box + 3, sizeof p.box_hi);
     if (hashed) {
-        copy_made(knn, grid, &v, photons);
+        note_copy(knn, grid, &v, photons);
         return query_hashed(knn, &v, map_start, queries, n, results, o, &p, indices, cap, stats,
                             t0);
     }
@@ -576,7 +576,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     }
     if (st != SLUICE_OK)
         goto runtime_fail;
-    copy_made(knn, grid, &v, photons);
+    note_copy(knn, grid, &v, photons);
 
     step = "ordering the queries by cell";
     st = ensure(knn->ctx, &knn->order_keys, 4, n);
