@@ -73,16 +73,31 @@ RT_NOINLINE void rt_light_block8(uint k0, uint skey, const rt_surface *s, float3
     uint8 lt;
     rt_sobol2_8(k, skey, &u0, &u1);
     rt_area_light_point8(u0, u1, f->area_lights, area_tris, area_cdf, tv, q, lc, &lt);
-    uint lts[RT_LIGHT_LANES];
-    float ler[RT_LIGHT_LANES], leg[RT_LIGHT_LANES], leb[RT_LIGHT_LANES];
-    vstore8(lt, 0, lts);
-    for (uint l = 0u; l < RT_LIGHT_LANES; ++l) {
-        rt_material lm = mats[tri_mat[lts[l]]];
-        ler[l] = lm.er;
-        leg[l] = lm.eg;
-        leb[l] = lm.eb;
+    float8 le[3];
+#ifndef RT_LIGHT_GATHER
+    uint ta, tb;
+    int8 on_b;
+    if (rt_two_of8(lt, &ta, &tb, &on_b)) { /* one or two triangles: read once */
+        rt_material ma = mats[tri_mat[ta]], mb = mats[tri_mat[tb]];
+        le[0] = select((float8)(ma.er), (float8)(mb.er), on_b);
+        le[1] = select((float8)(ma.eg), (float8)(mb.eg), on_b);
+        le[2] = select((float8)(ma.eb), (float8)(mb.eb), on_b);
+    } else
+#endif
+    {
+        uint lts[RT_LIGHT_LANES];
+        float ler[RT_LIGHT_LANES], leg[RT_LIGHT_LANES], leb[RT_LIGHT_LANES];
+        vstore8(lt, 0, lts);
+        for (uint l = 0u; l < RT_LIGHT_LANES; ++l) {
+            rt_material lm = mats[tri_mat[lts[l]]];
+            ler[l] = lm.er;
+            leg[l] = lm.eg;
+            leb[l] = lm.eb;
+        }
+        le[0] = vload8(0, ler);
+        le[1] = vload8(0, leg);
+        le[2] = vload8(0, leb);
     }
-    float8 le[3] = {vload8(0, ler), vload8(0, leg), vload8(0, leb)};
     float8 L[3] = {q[0] - o.x, q[1] - o.y, q[2] - o.z};
     /* whether a sample can add light, from signs and colours alone:
      * the count pass (an emitting body runs twice) stops here, and

@@ -45,6 +45,24 @@ inline uint rt_area_light_point(float u0, float u1, uint count, global const uin
     (T)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5], (p)[(i).s6], \
         (p)[(i).s7])
 
+/* Whether the 8 lanes of t hold at most two values: the first lane's in
+ * *ta, another's (or the same) in *tb, and the lanes holding *tb in *on_b.
+ * A scene's lights are often a few triangles (the Cornell box's two), so
+ * the 8 light samples side by side mostly hold one or two: a triangle's
+ * records are then read once each and broadcast, where a gather per field
+ * was half of the light sampling's time on cornell. */
+inline int rt_two_of8(uint8 t, uint *ta, uint *tb, int8 *on_b)
+{
+    uint ts[8];
+    vstore8(t, 0, ts);
+    *ta = ts[0];
+    *tb = ts[0];
+    for (uint l = 1u; l < 8u; ++l)
+        *tb = *tb == *ta ? ts[l] : *tb;
+    *on_b = t == (uint8)(*tb);
+    return !any((t != (uint8)(*ta)) & ~*on_b);
+}
+
 /* rt_area_light_point for 8 samples side by side (the shaders' light
  * samples): lane l picks with (u0, u1) lane l and gets the same triangle,
  * point and normal, the point's and normal's coordinates in q[0..2] and
@@ -56,28 +74,42 @@ inline void rt_area_light_point8(float8 u0, float8 u1, uint count, global const 
     uint8 lo = (uint8)(0u), hi = (uint8)(count - 1u);
     for (int8 more = lo < hi; any(more); more = lo < hi) {
         uint8 mid = (lo + hi) / 2u;
+        /* the lanes' first step reads one place (and with two triangles,
+         * the only step) */
+#ifndef RT_LIGHT_GATHER
+        int8 ge = !any(mid != (uint8)(mid.s0)) ? (float8)(area_cdf[mid.s0]) >= u0
+                                               : RT_GATHER8_(float8, area_cdf, mid) >= u0;
+#else
         int8 ge = RT_GATHER8_(float8, area_cdf, mid) >= u0;
+#endif
         hi = select(hi, mid, more & ge);
         lo = select(lo, mid + 1u, more & ~ge);
     }
-    uint8 before = select(lo - 1u, (uint8)(0u), lo == 0u);
-    float8 below = select(RT_GATHER8_(float8, area_cdf, before), (float8)(0.0f), lo == 0u);
-    float8 width = RT_GATHER8_(float8, area_cdf, lo) - below;
+    float8 below, width;
+    uint8 t;
+#ifndef RT_LIGHT_GATHER
+    uint la, lb;
+    int8 on_lb;
+    if (rt_two_of8(lo, &la, &lb, &on_lb)) { /* one or two places: each read once */
+        float pa = la ? area_cdf[la - 1u] : 0.0f, pb = lb ? area_cdf[lb - 1u] : 0.0f;
+        below = select((float8)(pa), (float8)(pb), on_lb);
+        width = select((float8)(area_cdf[la] - pa), (float8)(area_cdf[lb] - pb), on_lb);
+        t = select((uint8)(area_tris[la]), (uint8)(area_tris[lb]), as_uint8(on_lb));
+    } else
+#endif
+    {
+        uint8 before = select(lo - 1u, (uint8)(0u), lo == 0u);
+        below = select(RT_GATHER8_(float8, area_cdf, before), (float8)(0.0f), lo == 0u);
+        width = RT_GATHER8_(float8, area_cdf, lo) - below;
+        t = RT_GATHER8_(uint8, area_tris, lo);
+    }
     float8 ur = select((float8)(0.5f), clamp((u0 - below) / width, 0.0f, 1.0f), width > 0.0f);
-    uint8 t = RT_GATHER8_(uint8, area_tris, lo), at = t * 9u;
+    uint8 at = t * 9u;
     float8 v[9];
 #ifndef RT_LIGHT_GATHER
-    /* The lanes' triangles: a scene's lights are often a few triangles (the
-     * Cornell box's two), so the 8 lanes hold one or two of them, whose 9
-     * floats are read once each and broadcast; more than two take a gather
-     * per float (gathers were half of this function's time on cornell) */
-    uint ts[8];
-    vstore8(t, 0, ts);
-    uint ta = ts[0], tb = ta;
-    for (uint l = 1u; l < 8u; ++l)
-        tb = tb == ta ? ts[l] : tb;
-    int8 on_b = t == (uint8)(tb);
-    if (!any(t != (uint8)(ta) & ~on_b)) {
+    uint ta, tb;
+    int8 on_b;
+    if (rt_two_of8(t, &ta, &tb, &on_b)) {
         for (uint j = 0; j < 9u; ++j)
             v[j] = select((float8)(tv[ta * 9u + j]), (float8)(tv[tb * 9u + j]), on_b);
     } else
