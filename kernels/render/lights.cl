@@ -50,7 +50,8 @@ inline uint rt_area_light_point(float u0, float u1, uint count, global const uin
  * A scene's lights are often a few triangles (the Cornell box's two), so
  * the 8 light samples side by side mostly hold one or two: a triangle's
  * records are then read once each and broadcast, where a gather per field
- * was half of the light sampling's time on cornell. */
+ * was half of the light sampling's time on cornell. -DRT_LIGHT_GATHER
+ * (SLUICE_BUILD_OPTIONS) gathers every read, for measuring. */
 inline int rt_two_of8(uint8 t, uint *ta, uint *tb, int8 *on_b)
 {
     uint ts[8];
