@@ -54,14 +54,19 @@ inline uint rt_area_light_point(float u0, float u1, uint count, global const uin
  * (SLUICE_BUILD_OPTIONS) gathers every read, for measuring. */
 inline int rt_two_of8(uint8 t, uint *ta, uint *tb, int8 *on_b)
 {
-    uint ts[8];
-    vstore8(t, 0, ts);
-    *ta = ts[0];
-    *tb = ts[0];
-    for (uint l = 1u; l < 8u; ++l)
-        *tb = *tb == *ta ? ts[l] : *tb;
+    /* without branches (PoCL's any() branches on each pair of lanes): the
+     * least value other than the first lane's (no index is 0xffffffff) */
+    *ta = t.s0;
+    uint8 o = select(t, (uint8)(0xffffffffu), t == (uint8)(*ta));
+    uint4 o4 = min(o.lo, o.hi);
+    uint2 o2 = min(o4.lo, o4.hi);
+    uint m = min(o2.x, o2.y);
+    *tb = m == 0xffffffffu ? *ta : m;
     *on_b = t == (uint8)(*tb);
-    return !any((t != (uint8)(*ta)) & ~*on_b);
+    uint8 rest = as_uint8((t != (uint8)(*ta)) & ~*on_b);
+    uint4 r4 = rest.lo | rest.hi;
+    uint2 r2 = r4.lo | r4.hi;
+    return (r2.x | r2.y) == 0u;
 }
 
 /* rt_area_light_point for 8 samples side by side (the shaders' light
