@@ -45,6 +45,16 @@ inline uint rt_area_light_point(float u0, float u1, uint count, global const uin
     (T)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5], (p)[(i).s6], \
         (p)[(i).s7])
 
+/* Whether any lane of m has its sign bit set (any(m), without the
+ * branches PoCL's any() takes on each pair of lanes). */
+inline int rt_any_of8(int8 m)
+{
+    uint8 u = as_uint8(m);
+    uint4 a = u.lo | u.hi;
+    uint2 b = a.lo | a.hi;
+    return ((b.x | b.y) >> 31) != 0u;
+}
+
 /* Whether the 8 lanes of t hold at most two values: the first lane's in
  * *ta, another's (or the same) in *tb, and the lanes holding *tb in *on_b.
  * A scene's lights are often a few triangles (the Cornell box's two), so
@@ -54,8 +64,8 @@ inline uint rt_area_light_point(float u0, float u1, uint count, global const uin
  * (SLUICE_BUILD_OPTIONS) gathers every read, for measuring. */
 inline int rt_two_of8(uint8 t, uint *ta, uint *tb, int8 *on_b)
 {
-    /* without branches (PoCL's any() branches on each pair of lanes): the
-     * least value other than the first lane's (no index is 0xffffffff) */
+    /* without branches: the least value other than the first lane's (no
+     * index is 0xffffffff) */
     *ta = t.s0;
     uint8 o = select(t, (uint8)(0xffffffffu), t == (uint8)(*ta));
     uint4 o4 = min(o.lo, o.hi);
@@ -63,10 +73,7 @@ inline int rt_two_of8(uint8 t, uint *ta, uint *tb, int8 *on_b)
     uint m = min(o2.x, o2.y);
     *tb = m == 0xffffffffu ? *ta : m;
     *on_b = t == (uint8)(*tb);
-    uint8 rest = as_uint8((t != (uint8)(*ta)) & ~*on_b);
-    uint4 r4 = rest.lo | rest.hi;
-    uint2 r2 = r4.lo | r4.hi;
-    return (r2.x | r2.y) == 0u;
+    return !rt_any_of8((t != (uint8)(*ta)) & ~*on_b);
 }
 
 /* rt_area_light_point for 8 samples side by side (the shaders' light
@@ -78,13 +85,13 @@ inline void rt_area_light_point8(float8 u0, float8 u1, uint count, global const 
                                  float8 *lc, uint8 *lt)
 {
     uint8 lo = (uint8)(0u), hi = (uint8)(count - 1u);
-    for (int8 more = lo < hi; any(more); more = lo < hi) {
+    for (int8 more = lo < hi; rt_any_of8(more); more = lo < hi) {
         uint8 mid = (lo + hi) / 2u;
         /* the lanes' first step reads one place (and with two triangles,
          * the only step) */
 #ifndef RT_LIGHT_GATHER
-        int8 ge = !any(mid != (uint8)(mid.s0)) ? (float8)(area_cdf[mid.s0]) >= u0
-                                               : RT_GATHER8_(float8, area_cdf, mid) >= u0;
+        int8 ge = !rt_any_of8(mid != (uint8)(mid.s0)) ? (float8)(area_cdf[mid.s0]) >= u0
+                                                      : RT_GATHER8_(float8, area_cdf, mid) >= u0;
 #else
         int8 ge = RT_GATHER8_(float8, area_cdf, mid) >= u0;
 #endif
