@@ -289,19 +289,22 @@ pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params *p, uint exact,
             m &= d2 <= (float8)(st->r2);
         if (exact && st->count == p->k)
             m &= d2 < (float8)(st->hd[0]);
-#ifndef PM_SKIP_EMPTY
-        /* Holding k photons (at-least mode), a block is taken as its mask
-         * says, with no branch on whether it holds any photon within the
-         * radius: a coin toss the branch predictor lost often enough to
-         * cost more than the adds (bench/README.md) */
-        if (!exact && st->count >= p->k) {
+            /* Outside exact mode a block is taken as its mask says, with no
+             * branch on whether it holds any photon that passed: a coin toss
+             * the branch predictor lost often enough to cost more than the
+             * masked adds of nothing (bench/README.md); -DPM_SKIP_EMPTY keeps
+             * the branch, for measuring */
+#ifdef PM_SKIP_EMPTY
+        if (!sluice_mask8(m))
+            continue;
+#endif
+        if (!exact && st->count >= p->k) { /* the radius frozen */
             pm_take8(st, p, map, j, m, ar, ag, ab, indices);
             continue;
         }
-#endif
-        if (!sluice_mask8(m))
-            continue;
         if (exact) {
+            if (!sluice_mask8(m))
+                continue;
             /* Jensen's heap, one photon at a time, in order */
             float dd[PM_MAP_BLOCK];
             int mm[PM_MAP_BLOCK];
@@ -869,8 +872,10 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
         float8 dx = x - st->px, dy = y - st->py, dz = z - st->pz;
         float8 d2 = dx * dx + dy * dy + dz * dz;
         int8 m = (lane < (int8)((int)(e - j))) & (d2 <= (float8)(p->max_r2));
+#ifdef PM_SKIP_EMPTY /* as in pm_scan_run */
         if (!sluice_mask8(m))
             continue;
+#endif
         m &= (pm_hash_axis8(x, h->lo[0], h->inv_cell) == (int8)(c[0])) &
              (pm_hash_axis8(y, h->lo[1], h->inv_cell) == (int8)(c[1])) &
              (pm_hash_axis8(z, h->lo[2], h->inv_cell) == (int8)(c[2]));
@@ -880,8 +885,10 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
                        st->nz * vload8(0, map + PM_MAP_DZ * stride + j);
             m &= n < (float8)(0.0f);
         }
+#ifdef PM_SKIP_EMPTY
         if (!sluice_mask8(m))
             continue;
+#endif
         st->r2 = fmax(st->r2, pm_hmax8(select((float8)(0.0f), d2, m)));
         pm_take8(st, p, map, j, m, &ar, &ag, &ab, indices);
     }
