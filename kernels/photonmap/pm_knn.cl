@@ -225,7 +225,9 @@ static inline void pm_take8(pm_state *st, const pm_knn_params *p, global const f
 #endif
 /* The same for a hashed grid's buckets, whose blocks also test each
  * photon's cell: there eight stays the faster threshold (measured). */
+#ifndef PM_SHORT_BUCKET
 #define PM_SHORT_BUCKET 8u
+#endif
 
 /* Examines the photons map[b .. e) (Purcell Fig. 6.6): in the cell-ordered
  * copy of the map (pm_knn_gather) a run of cells along x is one contiguous
