@@ -7,6 +7,8 @@
 #ifndef SR_LIGHTS_CL
 #define SR_LIGHTS_CL
 
+#include "sluice.cl" /* sluice_mask8: the lanes' test without any()'s branches */
+
 /* Picks an emissive triangle with probability proportional to its area (u0)
  * and a uniform point `*q` on it (Shirley and Chiu's square-to-triangle map);
  * writes its normal (the emitting side, e1 x e2: not of unit length) to
@@ -45,16 +47,6 @@ inline uint rt_area_light_point(float u0, float u1, uint count, global const uin
     (T)((p)[(i).s0], (p)[(i).s1], (p)[(i).s2], (p)[(i).s3], (p)[(i).s4], (p)[(i).s5], (p)[(i).s6], \
         (p)[(i).s7])
 
-/* Whether any lane of m has its sign bit set (any(m), without the
- * branches PoCL's any() takes on each pair of lanes). */
-inline int rt_any_of8(int8 m)
-{
-    uint8 u = as_uint8(m);
-    uint4 a = u.lo | u.hi;
-    uint2 b = a.lo | a.hi;
-    return ((b.x | b.y) >> 31) != 0u;
-}
-
 /* Whether the 8 lanes of t hold at most two values: the first lane's in
  * *ta, another's (or the same) in *tb, and the lanes holding *tb in *on_b.
  * A scene's lights are often a few triangles (the Cornell box's two), so
@@ -73,7 +65,7 @@ inline int rt_two_of8(uint8 t, uint *ta, uint *tb, int8 *on_b)
     uint m = min(o2.x, o2.y);
     *tb = m == 0xffffffffu ? *ta : m;
     *on_b = t == (uint8)(*tb);
-    return !rt_any_of8((t != (uint8)(*ta)) & ~*on_b);
+    return !sluice_mask8((t != (uint8)(*ta)) & ~*on_b);
 }
 
 /* rt_area_light_point for 8 samples side by side (the shaders' light
@@ -85,13 +77,13 @@ inline void rt_area_light_point8(float8 u0, float8 u1, uint count, global const 
                                  float8 *lc, uint8 *lt)
 {
     uint8 lo = (uint8)(0u), hi = (uint8)(count - 1u);
-    for (int8 more = lo < hi; rt_any_of8(more); more = lo < hi) {
+    for (int8 more = lo < hi; sluice_mask8(more); more = lo < hi) {
         uint8 mid = (lo + hi) / 2u;
         /* the lanes' first step reads one place (and with two triangles,
          * the only step) */
 #ifndef RT_LIGHT_GATHER
-        int8 ge = !rt_any_of8(mid != (uint8)(mid.s0)) ? (float8)(area_cdf[mid.s0]) >= u0
-                                                      : RT_GATHER8_(float8, area_cdf, mid) >= u0;
+        int8 ge = !sluice_mask8(mid != (uint8)(mid.s0)) ? (float8)(area_cdf[mid.s0]) >= u0
+                                                        : RT_GATHER8_(float8, area_cdf, mid) >= u0;
 #else
         int8 ge = RT_GATHER8_(float8, area_cdf, mid) >= u0;
 #endif
