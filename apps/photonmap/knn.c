@@ -336,7 +336,7 @@ static sluice_status results_stats(pm_knn *knn, sluice_stream *results, size_t n
 }
 
 /* The radius search over a hashed grid (the map already gathered): one
- * launch of pm_knn_hash, one pass. */
+ * launch of pm_knn_hash, one pass; n > 0. */
 static sluice_status query_hashed(pm_knn *knn, const sr_point_grid_view *v,
                                   sluice_stream *map_start, sluice_stream *queries, size_t n,
                                   sluice_stream *results, const pm_knn_options *o,
@@ -371,7 +371,7 @@ static sluice_status query_hashed(pm_knn *knn, const sr_point_grid_view *v,
     /* the length first: a pass hook may read the results */
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(results, n);
-    if (st == SLUICE_OK && n)
+    if (st == SLUICE_OK)
         st = sluice_kernel_launch_count(k, n);
     if (st == SLUICE_OK && indices)
         st = sluice_stream_set_length(indices, n * cap);
@@ -391,13 +391,76 @@ static sluice_status query_hashed(pm_knn *knn, const sr_point_grid_view *v,
     if (stats) {
         stats->passes = 1;
         stats->batches = 1;
-        if (n)
-            st = results_stats(knn, results, n, stats);
+        st = results_stats(knn, results, n, stats);
         if (st != SLUICE_OK)
             return st;
         stats->seconds = now() - t0;
     }
     return SLUICE_OK;
+}
+
+/* The cell-ordered copy of the photons of grid view v (map, map_start)
+ * and its bounding box (copy_box), `stride` floats a plane. Cells go back
+ * to back in cell order, so that a run of cells along x is one run of
+ * photons (the stencil build's footprints have gaps, and the bitonic
+ * build's starts of empty cells are not needed to be in order). The
+ * photons' box bounds every distance: queries far from all photons (on
+ * the walls over glassball's floor) end at once. */
+static sluice_status copy_map(pm_knn *knn, const sr_point_grid_view *v, sluice_stream *photons,
+                              size_t stride, uint32_t stored)
+{
+    uint32_t stride32 = (uint32_t)stride;
+    sluice_status st = ensure(knn->ctx, &knn->map, sizeof(float), stride * PM_MAP_PLANES);
+    if (st == SLUICE_OK)
+        st = ensure(knn->ctx, &knn->map_start, 4, v->cells);
+    if (st == SLUICE_OK)
+        st = sluice_scan(knn->ctx, v->cell_count, knn->map_start, SLUICE_U32, 0, NULL);
+    sluice_stream *gather_in[] = {v->order,       v->cell_start, v->cell_count, v->cell_arrived,
+                                  knn->map_start, photons,       knn->map};
+    for (unsigned i = 0; st == SLUICE_OK && i < 7; ++i)
+        st = sluice_kernel_set_stream(knn->k_gather, i, gather_in[i], 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(knn->k_gather, 7, sizeof stride32, &stride32);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(knn->k_gather, v->cells);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(knn->map, stride * PM_MAP_PLANES);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_bounds, 0, knn->map, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(knn->k_bounds, 1, sizeof stride32, &stride32);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(knn->k_bounds, 2, sizeof stored, &stored);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_bounds, 3, knn->box, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(knn->k_bounds, 6);
+    if (st == SLUICE_OK)
+        st = sluice_stream_set_length(knn->box, 6);
+    if (st == SLUICE_OK)
+        st = sluice_stream_download(knn->box, knn->copy_box, 6, NULL);
+    return st;
+}
+
+/* The summed-count table of the dense grid's cells (pm_sat_at): running
+ * sums along x, then y, then z. */
+static sluice_status sum_counts(pm_knn *knn, const sr_point_grid_view *v, const pg_params *g)
+{
+    sluice_status st = ensure(knn->ctx, &knn->sat, 4, v->cells);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(knn->k_sat[0], 0, v->cell_count, 0);
+    for (int a = 0; st == SLUICE_OK && a < 3; ++a) {
+        sluice_kernel *ks = knn->k_sat[a];
+        unsigned first = a == 0 ? 1u : 0u;
+        /* lines across the axis: the product of the other two sides */
+        size_t lines = (size_t)v->cells / g->dims[a];
+        st = sluice_kernel_set_arg(ks, first, sizeof *g, g);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_stream(ks, first + 1, knn->sat, 0);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_launch_count(ks, lines);
+    }
+    return st;
 }
 
 /* Notes what the cell-ordered copy, its box and the summed counts were
@@ -470,7 +533,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     }
 
     uint32_t exact = o->mode == PM_KNN_EXACT;
-    size_t batch = n ? n : 1;
+    size_t batch = n;
     if (exact) {
         size_t per = (size_t)o->k * 8;
         size_t fit = PM_KNN_EXACT_HEAP_BYTES / per;
@@ -503,49 +566,11 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         return FAIL(knn, SLUICE_ERROR_LIMIT, "kNN: %zu photons are more than the map's %u",
                     gs.stored, (unsigned)(UINT32_MAX / PM_MAP_PLANES - 2 * PM_MAP_BLOCK));
     if (st == SLUICE_OK && !reuse)
-        st = ensure(knn->ctx, &knn->map, sizeof(float), stride * PM_MAP_PLANES);
-    /* cells back to back in cell order, so that a run of cells along x is
-     * one run of photons (the stencil build's footprints have gaps, and the
-     * bitonic build's starts of empty cells are not needed to be in order) */
-    sluice_stream *map_start = knn->map_start;
-    if (st == SLUICE_OK && !reuse)
-        st = ensure(knn->ctx, &knn->map_start, 4, v.cells);
-    if (st == SLUICE_OK && !reuse) {
-        map_start = knn->map_start;
-        st = sluice_scan(knn->ctx, v.cell_count, map_start, SLUICE_U32, 0, NULL);
-    }
-    if (!reuse) {
-        sluice_stream *gather_in[] = {v.order,   v.cell_start, v.cell_count, v.cell_arrived,
-                                      map_start, photons,      knn->map};
-        for (unsigned i = 0; st == SLUICE_OK && i < 7; ++i)
-            st = sluice_kernel_set_stream(knn->k_gather, i, gather_in[i], 0);
-        if (st == SLUICE_OK)
-            st = sluice_kernel_set_arg(knn->k_gather, 7, sizeof stride32, &stride32);
-        if (st == SLUICE_OK)
-            st = sluice_kernel_launch_count(knn->k_gather, v.cells);
-        if (st == SLUICE_OK)
-            st = sluice_stream_set_length(knn->map, stride * PM_MAP_PLANES);
-    }
-    /* the photons' box bounds every distance: queries far from all photons
-     * (on the walls over glassball's floor) end at once */
-    uint32_t stored32 = (uint32_t)gs.stored;
-    float *box = knn->copy_box;
-    if (st == SLUICE_OK && !reuse)
-        st = sluice_kernel_set_stream(knn->k_bounds, 0, knn->map, 0);
-    if (st == SLUICE_OK && !reuse)
-        st = sluice_kernel_set_arg(knn->k_bounds, 1, sizeof stride32, &stride32);
-    if (st == SLUICE_OK && !reuse)
-        st = sluice_kernel_set_arg(knn->k_bounds, 2, sizeof stored32, &stored32);
-    if (st == SLUICE_OK && !reuse)
-        st = sluice_kernel_set_stream(knn->k_bounds, 3, knn->box, 0);
-    if (st == SLUICE_OK && !reuse)
-        st = sluice_kernel_launch_count(knn->k_bounds, 6);
-    if (st == SLUICE_OK && !reuse)
-        st = sluice_stream_set_length(knn->box, 6);
-    if (st == SLUICE_OK && !reuse)
-        st = sluice_stream_download(knn->box, box, 6, NULL);
+        st = copy_map(knn, &v, photons, stride, (uint32_t)gs.stored);
     if (st != SLUICE_OK)
         goto runtime_fail;
+    sluice_stream *map_start = knn->map_start;
+    const float *box = knn->copy_box;
 
     pg_params g;
     pm_knn_params p;
@@ -560,20 +585,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
 
     step = "summing the cell counts";
     if (!reuse)
-        st = ensure(knn->ctx, &knn->sat, 4, v.cells);
-    if (st == SLUICE_OK && !reuse)
-        st = sluice_kernel_set_stream(knn->k_sat[0], 0, v.cell_count, 0);
-    for (int a = 0; st == SLUICE_OK && !reuse && a < 3; ++a) {
-        sluice_kernel *ks = knn->k_sat[a];
-        unsigned first = a == 0 ? 1u : 0u;
-        /* lines across the axis: the product of the other two sides */
-        size_t lines = (size_t)v.cells / g.dims[a];
-        st = sluice_kernel_set_arg(ks, first, sizeof g, &g);
-        if (st == SLUICE_OK)
-            st = sluice_kernel_set_stream(ks, first + 1, knn->sat, 0);
-        if (st == SLUICE_OK)
-            st = sluice_kernel_launch_count(ks, lines);
-    }
+        st = sum_counts(knn, &v, &g);
     if (st != SLUICE_OK)
         goto runtime_fail;
     note_copy(knn, grid, &v, photons);
@@ -590,13 +602,13 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         st = sluice_kernel_set_stream(knn->k_order, 2, knn->order_keys, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(knn->k_order, 3, knn->order, 0);
-    if (st == SLUICE_OK && n)
+    if (st == SLUICE_OK)
         st = sluice_kernel_launch_count(knn->k_order, n);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(knn->order_keys, n);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(knn->order, n);
-    if (st == SLUICE_OK && n)
+    if (st == SLUICE_OK)
         st = sluice_sort_radix(knn->ctx, knn->order_keys, knn->order);
     if (st == SLUICE_OK)
         st = ensure(knn->ctx, &knn->qsorted, sizeof(pm_query), n);
@@ -608,7 +620,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         st = sluice_kernel_set_stream(knn->k_sortq, i, sortq_args[i], 0);
     for (unsigned i = 0; st == SLUICE_OK && i < 3; ++i)
         st = sluice_kernel_set_stream(knn->k_unsort, i, unsort_args[i], 0);
-    if (st == SLUICE_OK && n)
+    if (st == SLUICE_OK)
         st = sluice_kernel_launch_count(knn->k_sortq, n);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(knn->qsorted, n);
@@ -660,7 +672,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
      * any result */
     step = "clearing the results";
     const pm_knn_result zero = {0.0f, 0.0f, 0.0f, 0.0f, 0u, 0u, 0u};
-    st = n ? sluice_stream_fill(knn->rsorted, &zero, n) : SLUICE_OK;
+    st = sluice_stream_fill(knn->rsorted, &zero, n);
     if (st == SLUICE_OK)
         st = sluice_stream_set_length(results, n);
     if (st != SLUICE_OK)
@@ -699,15 +711,14 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     }
     knn->on_pass = NULL;
     step = "writing the results";
-    if (n)
-        st = sluice_kernel_launch_count(knn->k_unsort, n);
+    st = sluice_kernel_launch_count(knn->k_unsort, n);
     if (st == SLUICE_OK && indices)
         st = sluice_stream_set_length(indices, n * cap);
     if (st == SLUICE_OK)
         st = sluice_context_finish(knn->ctx);
     if (st != SLUICE_OK)
         goto runtime_fail;
-    if (stats && n) {
+    if (stats) {
         st = results_stats(knn, results, n, stats);
         if (st != SLUICE_OK)
             return st;
