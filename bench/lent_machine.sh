@@ -16,10 +16,10 @@
 #   gpu-state-ab=R  bench_streams on the GPU with the work-items' state in
 #                 registers (the default) and without (-DSLUICE_NO_UNROLL_STATE),
 #                 in turn, R rounds -> state-{on,off}-N.json
-#   gpu-block-ab=R  bench_streams on the GPU with SLUICE_FOR_EACH_BLOCK's
-#                 blocks of 4 records (the default) and of 16
-#                 (-DSLUICE_BLOCK=16: group order scans once a block), in
-#                 turn, R rounds -> block-{on,off}-N.json (off: 16)
+#   gpu-block-ab=R  bench_streams on the GPU with compaction's and
+#                 partition's blocks of 16 records (the default) and of 4
+#                 (-DCOMPACT_BLOCK=4: group order scans once a block), in
+#                 turn, R rounds -> block-{on,off}-N.json (off: 4)
 #   gpu-rt-ab=R   bench_raytrace on the GPU with the stream tracer's kernels
 #                 one ray per work-item (the default there) and in blocks of
 #                 16 rays (-DRT_NO_PER_RAY), in turn, R rounds
@@ -212,8 +212,8 @@ for phase in "$@"; do
             build/bench/bench_streams --skip-bitonic
         ;;
     gpu-block-ab=*)
-        # blocks of 4 records (SLUICE_BLOCK, kernels/sluice.cl) against 16
-        gpu_ab "${phase#gpu-block-ab=}" -DSLUICE_BLOCK=16 block 90 \
+        # blocks of 16 records (COMPACT_BLOCK, kernels/compact.cl) against 4
+        gpu_ab "${phase#gpu-block-ab=}" -DCOMPACT_BLOCK=4 block 90 \
             "^ *(copy|scan|split|compact|partition)" \
             build/bench/bench_streams --skip-bitonic
         ;;

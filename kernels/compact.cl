@@ -21,7 +21,7 @@
 
 /* 4-byte records, the common case, go 16 at a time (SLUICE_EMIT16) where
  * that is fast. Elsewhere (GPUs) they go 4 at a time as one vector
- * (SLUICE_FOR_EACH_BLOCK, SLUICE_EMIT4), whose blocks a GPU's work-items
+ * (SLUICE_FOR_EACH_BLOCK_OF, SLUICE_EMIT4), whose blocks a GPU's work-items
  * read side by side (interleaved), where a range would give each its own
  * stretch; one record at a time kept one 4-byte load in flight per
  * work-item (bench/README.md, the H100).
@@ -32,6 +32,16 @@
  * knows), so without this each block's loads wait behind the previous
  * block's stores. It matters with AVX2 kernels (measured in
  * bench/README.md, bench_streams). */
+/* COMPACT_BLOCK: a GPU work-item's block per step, four such vectors.
+ * Group order (ordered outputs) scans the group's counts once a step, so
+ * blocks of 16 scan a quarter as often as blocks of 4; on the H100 longer
+ * ones lost their reads' coalescing (bench/README.md). -DCOMPACT_BLOCK=4 in
+ * SLUICE_BUILD_OPTIONS measures the trade (bench/lent_machine.sh
+ * gpu-block-ab). A multiple of 4. */
+#ifndef COMPACT_BLOCK
+#define COMPACT_BLOCK 16u
+#endif
+
 /* COMPACT_NEXT: an unordered output's chunk is counted, then written, so
  * while a chunk is written (its records already in the cache) the memory
  * bus would idle; the block kernels ask for the two lines at the same place
@@ -77,7 +87,7 @@ __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint
 __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint *flags,
                          global uint *out)
 {
-    SLUICE_FOR_EACH_BLOCK(b, e)
+    SLUICE_FOR_EACH_BLOCK_OF(b, e, COMPACT_BLOCK)
     {
         uint i = b;
         for (; i + 4u <= e && (i & 3u) == 0u; i += 4u) {
@@ -250,7 +260,7 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
     __kernel void partition_##SUFFIX(SLUICE_PARAMS, global const uint *in, T t,                    \
                                      global uint *below, global uint *above)                       \
     {                                                                                              \
-        SLUICE_FOR_EACH_BLOCK(b, e)                                                                \
+        SLUICE_FOR_EACH_BLOCK_OF(b, e, COMPACT_BLOCK)                                              \
         {                                                                                          \
             uint i = b;                                                                            \
             for (; i + 4u <= e && (i & 3u) == 0u; i += 4u) {                                       \

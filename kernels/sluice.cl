@@ -153,7 +153,7 @@ typedef struct sluice_launch_ {
 typedef struct sluice_state_ {
     uint begin, end; /* the chunk: records begin, begin + step, ... before end */
     uint step;       /* 1 (contiguous), or the work-group size (interleaved) */
-    uint blk;        /* records per step: 1, or SLUICE_BLOCK (SLUICE_FOR_EACH_BLOCK) */
+    uint blk;        /* records per step: 1, or the block form's width */
     uint uend;       /* the loop's end: `end`, or past it where the group steps together */
     uint pass;       /* 0: count, 1: write, 3: a step's count (group order, below) */
     uint omask;      /* ordered outputs placed by the group (group order), else 0 */
@@ -300,14 +300,10 @@ SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
 #define SLUICE_FORM_RANGE_ 1
 #define SLUICE_FORM_BLOCK_ 2
 
-/* Records per block of SLUICE_FOR_EACH_BLOCK in the interleaved layout.
- * Group order scans its counts once per block (a step), so longer blocks
- * scan less often and read less side by side; -DSLUICE_BLOCK=16 in
- * SLUICE_BUILD_OPTIONS measures the trade (bench/lent_machine.sh
- * gpu-block-ab). A multiple of 4. */
-#ifndef SLUICE_BLOCK
+/* Records per block of SLUICE_FOR_EACH_BLOCK in the interleaved layout:
+ * the 4 of one uint4 load, which the README's kernels take as given.
+ * SLUICE_FOR_EACH_BLOCK_OF names another multiple of 4. */
 #define SLUICE_BLOCK 4u
-#endif
 
 /* The records of this work-item. Contiguous chunks (the range form, or a
  * launch without `interleave`): work-item i takes [i chunk, (i + 1) chunk),
@@ -317,7 +313,7 @@ SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
  * its work-items' chunks together, and work-item l of it takes every G-th of
  * them from the l-th (G the work-group size), so neighbouring work-items
  * read neighbouring records; in the block form every G-th block of
- * SLUICE_BLOCK records from the l-th. Ordered outputs are then placed in
+ * `width` records from the l-th. Ordered outputs are then placed in
  * group order (above).
  *
  * In the contiguous layout, for kernels marked uneven
@@ -332,7 +328,7 @@ SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
  * (bench/README.md, "Uneven records spread over the threads"). A chunk's
  * records, and the order of ordered outputs (by chunk), are as before. */
 SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
-                                  local uint *lds, const sluice_launch_ *L, int form)
+                                  local uint *lds, const sluice_launch_ *L, int form, uint width)
 {
     uint n = L->n_fixed;
     if (n == SLUICE_NONE) {
@@ -349,7 +345,7 @@ SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global co
     const int inter = L->interleave && form != SLUICE_FORM_RANGE_;
     if (inter) {
         uint l = (uint)get_local_id(0), g = (uint)get_local_size(0);
-        uint w = form == SLUICE_FORM_BLOCK_ ? SLUICE_BLOCK : 1u;
+        uint w = form == SLUICE_FORM_BLOCK_ ? width : 1u;
         ulong tile = (ulong)(id - l) * L->chunk;
         s->begin = (uint)min(tile + (ulong)w * l, (ulong)n);
         s->end = (uint)min(tile + (ulong)g * L->chunk, (ulong)n);
@@ -537,9 +533,10 @@ SLUICE_INLINE_ void sluice_next_(sluice_state_ *s, global uint *vars, global uin
 
 /* The passes of a loop form: the state, then the loop over the passes,
  * whose body is the loop over the work-item's records. */
-#define SLUICE_PASSES_(form)                                                                       \
+#define SLUICE_PASSES_(form, width)                                                                \
     sluice_state_ sluice_s_;                                                                       \
-    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_, form);       \
+    sluice_begin_(&sluice_s_, sluice_vars_, sluice_scratch_, sluice_lds_, &sluice_L_, form,        \
+                  width);                                                                          \
     for (; sluice_s_.pass != 2u;                                                                   \
          sluice_next_(&sluice_s_, sluice_vars_, sluice_scratch_, &sluice_L_))
 
@@ -580,12 +577,12 @@ SLUICE_INLINE_ uint sluice_advance_(sluice_state_ *s, uint id)
  * for every work-item of a group in group order, and skip what lies past
  * `end`. */
 #define SLUICE_FOR_EACH(id)                                                                        \
-    SLUICE_PASSES_(SLUICE_FORM_RECORD_)                                                            \
+    SLUICE_PASSES_(SLUICE_FORM_RECORD_, 1u)                                                        \
     for (uint id = sluice_s_.begin; id < sluice_s_.uend; id = sluice_advance_(&sluice_s_, id))     \
         if (id < sluice_s_.end)
 #else
 #define SLUICE_FOR_EACH(id)                                                                        \
-    SLUICE_PASSES_(SLUICE_FORM_RECORD_)                                                            \
+    SLUICE_PASSES_(SLUICE_FORM_RECORD_, 1u)                                                        \
     for (uint id = sluice_s_.begin; id < sluice_s_.end; id += sluice_s_.step)
 #endif
 
@@ -596,23 +593,31 @@ SLUICE_INLINE_ uint sluice_advance_(sluice_state_ *s, uint id)
  * records. The per-record macros (SLUICE_EMIT_IF, SLUICE_COUNT) work inside
  * it too, e.g. for a tail of fewer than 16 records. */
 #define SLUICE_FOR_EACH_RANGE(b, e)                                                                \
-    SLUICE_PASSES_(SLUICE_FORM_RANGE_)                                                             \
+    SLUICE_PASSES_(SLUICE_FORM_RANGE_, 1u)                                                         \
     for (uint b = sluice_s_.begin, e = sluice_s_.end, sluice_once_ = 1u; sluice_once_;             \
          sluice_once_ = 0u)
 
 /* The block form of SLUICE_FOR_EACH, for bodies that take a few records at a
  * time as one vector on GPUs: the body runs on blocks of consecutive
  * records [b, e) of this work-item, in increasing order. In the interleaved
- * layout (GPUs) a block holds SLUICE_BLOCK (4, or another multiple of 4)
- * records, fewer at the end of the input, and the blocks of a work-group's
- * work-items lie side by side, so that their vector loads are coalesced; b
- * is then a multiple of 4 when the work-group size is (a block of 4-byte
- * records starts on a 16-byte boundary). Elsewhere the body runs once per
- * pass on the whole chunk, as in SLUICE_FOR_EACH_RANGE. A body loops over
- * [b, e) itself and handles any length; SLUICE_EMIT4 emits 4 records from
- * a vector. The rules above hold per record. */
-#define SLUICE_FOR_EACH_BLOCK(b, e)                                                                \
-    SLUICE_PASSES_(SLUICE_FORM_BLOCK_)                                                             \
+ * layout (GPUs) a block holds SLUICE_BLOCK (4) records, fewer at the end of
+ * the input, and the blocks of a work-group's work-items lie side by side,
+ * so that their vector loads are coalesced; b is then a multiple of 4 when
+ * the work-group size is (a block of 4-byte records starts on a 16-byte
+ * boundary). Elsewhere the body runs once per pass on the whole chunk, as
+ * in SLUICE_FOR_EACH_RANGE. A body loops over [b, e) itself and handles any
+ * length; SLUICE_EMIT4 emits 4 records from a vector. The rules above hold
+ * per record. */
+#define SLUICE_FOR_EACH_BLOCK(b, e) SLUICE_FOR_EACH_BLOCK_OF(b, e, SLUICE_BLOCK)
+
+/* SLUICE_FOR_EACH_BLOCK with blocks of W records in the interleaved layout,
+ * W a multiple of 4 (a constant). Ordered outputs there are placed in group
+ * order, which counts and scans each step of the work-group (a block a
+ * work-item) across the group, so longer blocks scan less often; the body
+ * then loops over the block's 4-record vectors. The library's compaction
+ * and partition take 16 (bench/README.md, the H100). */
+#define SLUICE_FOR_EACH_BLOCK_OF(b, e, W)                                                          \
+    SLUICE_PASSES_(SLUICE_FORM_BLOCK_, (W))                                                        \
     for (uint b = sluice_s_.begin, e = min(b + sluice_s_.blk, sluice_s_.end); b < sluice_s_.uend;  \
          b = sluice_advance_(&sluice_s_, b), e = min(b + sluice_s_.blk, sluice_s_.end))            \
         if (b < sluice_s_.end)
