@@ -12,7 +12,8 @@
 
 /* The CPU and its widest vector ISA. */
 typedef struct bench_machine {
-    char cpu[256];     /* "model name" of /proc/cpuinfo, or "unknown" */
+    char cpu[256];     /* "model name (family F, model M)" of /proc/cpuinfo, or
+                          "unknown" */
     const char *isa;   /* "AVX-512", "AVX2", "SSE" or "unknown" */
     const char *block; /* SLUICE_EMIT16's path in the kernels: "avx512"
                           (compress), "avx2" (vpermd), "portable", or
@@ -76,15 +77,26 @@ static inline void bench_machine_probe(sluice_context *ctx, bench_machine *m)
     if (!f)
         return;
     char line[4096];
-    int have_model = 0, have_flags = 0;
+    int have_model = 0, have_flags = 0, family = -1, model = -1;
     while ((!have_model || !have_flags) && fgets(line, sizeof line, f)) {
         char *c = strchr(line, ':');
         if (!c)
             continue;
-        if (!have_model && strncmp(line, "model name", 10) == 0) {
+        /* The model name alone can be generic ("Intel(R) Xeon(R)
+         * Processor", "AMD EPYC" in virtual machines): family and model
+         * tell the generations apart. They come before it. */
+        if (strncmp(line, "cpu family", 10) == 0)
+            sscanf(c + 1, "%d", &family);
+        else if (strncmp(line, "model", 5) == 0 &&
+                 strspn(line + 5, " \t") == (size_t)(c - line - 5))
+            sscanf(c + 1, "%d", &model); /* "model : N", not "model name" */
+        else if (!have_model && strncmp(line, "model name", 10) == 0) {
             c += 1 + (c[1] == ' ');
             c[strcspn(c, "\n")] = '\0';
-            snprintf(m->cpu, sizeof m->cpu, "%s", c);
+            if (family >= 0 && model >= 0)
+                snprintf(m->cpu, sizeof m->cpu, "%.200s (family %d, model %d)", c, family, model);
+            else
+                snprintf(m->cpu, sizeof m->cpu, "%s", c);
             have_model = 1;
         } else if (!have_flags && strncmp(line, "flags", 5) == 0) {
             m->isa = strstr(c, " avx512f") ? "AVX-512" : strstr(c, " avx2") ? "AVX2" : "SSE";

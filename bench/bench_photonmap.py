@@ -39,16 +39,21 @@ PURCELL = {
 
 
 def cpu_name():
+    """The model name, family and model (the name alone can be generic in a
+    virtual machine) and the widest vector ISA, from /proc/cpuinfo."""
     try:
         with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    name = line.split(":", 1)[1].strip()
-                    flags = open("/proc/cpuinfo").read()
-                    return name + (" (AVX-512)" if "avx512f" in flags else " (AVX2, no AVX-512)")
+            text = f.read()
     except OSError:
-        pass
-    return platform.processor() or "unknown"
+        return platform.processor() or "unknown"
+    first = {}
+    for line in text.splitlines():
+        key, _, value = line.partition(":")
+        first.setdefault(key.strip(), value.strip())
+    name = first.get("model name", "unknown")
+    if "cpu family" in first and "model" in first:
+        name += " (family %s, model %s)" % (first["cpu family"], first["model"])
+    return name + (" (AVX-512)" if "avx512f" in text else " (AVX2, no AVX-512)")
 
 
 FAST = ["--exec", "fused", "--shells-per-pass", "all"]
