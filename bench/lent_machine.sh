@@ -60,7 +60,9 @@
 #
 # RT_SIZE (default 512) is the image side of the PoCL phases' ray tracer
 # runs (spread-ab, rt-eff, rt-chunks): at 16 threads a 512x512 frame is
-# short enough that a launch's fixed cost is a tenth of it.
+# short enough that a launch's fixed cost is a tenth of it. RT_SCENES
+# (default "cornell bunny bunny-close") and RT_REPS (default 2) narrow them:
+# at 1024x1024 one thread took 135 s for the three scenes' two rounds.
 # LENT_DEVICE (default NVIDIA) names the device of the gpu phases, so that
 # the script can be tried on any machine first (LENT_DEVICE=pthread).
 # What it expects: the build in ./build (made on Debian 12, with rpaths
@@ -146,12 +148,14 @@ gpu_ab() {
 # bench_raytrace's three scenes on PoCL at T threads, its rates printed:
 # rt_scenes T OUT [VAR=VALUE...]
 rt_scenes() {
-    local t=$1 out=$2 size=${RT_SIZE:-512}
+    local t=$1 out=$2 size=${RT_SIZE:-512} sc scenes=""
     shift 2
+    for sc in ${RT_SCENES:-cornell bunny bunny-close}; do scenes="$scenes --scene $sc"; done
+    # shellcheck disable=SC2086
     POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t \
         limited $((90 * size / 512 * size / 512)) env "$@" \
-        taskset -c 0-$((t - 1)) build/bench/bench_raytrace --skip-purcell --reps 2 \
-        --size "$size" --scene cornell --scene bunny --scene bunny-close --out "$out" |
+        taskset -c 0-$((t - 1)) build/bench/bench_raytrace --skip-purcell --reps "${RT_REPS:-2}" \
+        --size "$size" $scenes --out "$out" |
         grep -E "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]"
 }
 
