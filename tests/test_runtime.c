@@ -75,6 +75,20 @@ static const char *kernels_src =
     "            SLUICE_EMIT_IF(0, out, in[i], in[i] < 100u);\n"
     "    }\n"
     "}\n"
+    /* SLUICE_FOR_EACH_BLOCK_OF: blocks of 8 in the interleaved layout, two
+     * vectors each (the library's compaction takes 16 this way). */
+    "__kernel void small_values_of8(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH_BLOCK_OF(b, e, 8u) {\n"
+    "        uint i = b;\n"
+    "        for (; i + 4u <= e && (i & 3u) == 0u; i += 4u) {\n"
+    "            uint4 x = *(global const uint4 *)(in + i);\n"
+    "            SLUICE_EMIT4(0, out, x, sluice_mask4(x < (uint4)100u));\n"
+    "        }\n"
+    "        for (; i < e; ++i)\n"
+    "            SLUICE_EMIT_IF(0, out, in[i], in[i] < 100u);\n"
+    "    }\n"
+    "}\n"
     /* Nine mapped outputs: one more than a launch sets the lengths of. */
     "__kernel void fan9(SLUICE_PARAMS, global const uint *in, global uint *o0,\n"
     "                   global uint *o1, global uint *o2, global uint *o3, global uint *o4,\n"
@@ -472,12 +486,14 @@ static void test_multi_emit(sluice_context *ctx, sluice_program *p, sluice_outpu
     free(got);
 }
 
-/* SLUICE_FOR_EACH_RANGE + SLUICE_EMIT16 and SLUICE_FOR_EACH_BLOCK +
- * SLUICE_EMIT4 against C, on lengths around the 16- and 4-record blocks,
- * both modes. */
+/* SLUICE_FOR_EACH_RANGE + SLUICE_EMIT16 and SLUICE_FOR_EACH_BLOCK(_OF) +
+ * SLUICE_EMIT4 against C, on lengths around the 16-, 8- and 4-record
+ * blocks, both modes. */
 static void test_block_emit(sluice_context *ctx, sluice_program *p, const char *kernel)
 {
-    const size_t sizes[] = {0, 1, 3, 4, 5, 15, 16, 17, 1000, 1027, 100003};
+    /* the last one long enough that the interleaved layout gives a
+     * work-item several blocks (chunks of 32 records and more) */
+    const size_t sizes[] = {0, 1, 3, 4, 5, 7, 8, 9, 15, 16, 17, 1000, 1027, 100003, 2097159};
     sluice_kernel *k = NULL;
     CHECK_OK(ctx, sluice_kernel_create(p, kernel, &k));
     for (int m = 0; m < 2; ++m) {
@@ -1243,6 +1259,7 @@ int main(void)
     test_multi_emit(ctx, p, SLUICE_UNORDERED);
     test_block_emit(ctx, p, "small_values");
     test_block_emit(ctx, p, "small_values4");
+    test_block_emit(ctx, p, "small_values_of8");
     test_counters_restart(ctx, p);
     test_loop(ctx, p);
     test_mapped_lengths(ctx, p);
