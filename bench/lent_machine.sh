@@ -20,6 +20,10 @@
 #                 partition's blocks of 16 records (the default) and of 4
 #                 (-DCOMPACT_BLOCK=4: group order scans once a block), in
 #                 turn, R rounds -> block-{on,off}-N.json (off: 4)
+#   gpu-scan-ab=R  bench_streams on the GPU with group order's scan as
+#                 built (16 work-items' serial segments) and in log2(G)
+#                 rounds of the whole group (-DSLUICE_KS_SCAN), in turn, R
+#                 rounds -> ksscan-{on,off}-N.json (off: the rounds)
 #   gpu-rt-ab=R   bench_raytrace on the GPU with the stream tracer's kernels
 #                 one ray per work-item (the default there) and in blocks of
 #                 16 rays (-DRT_NO_PER_RAY), in turn, R rounds
@@ -218,6 +222,13 @@ for phase in "$@"; do
     gpu-block-ab=*)
         # blocks of 16 records (COMPACT_BLOCK, kernels/compact.cl) against 4
         gpu_ab "${phase#gpu-block-ab=}" -DCOMPACT_BLOCK=4 block 90 \
+            "^ *(copy|scan|split|compact|partition)" \
+            build/bench/bench_streams --skip-bitonic
+        ;;
+    gpu-scan-ab=*)
+        # group order's scan (sluice_group_place_, kernels/sluice.cl): 16
+        # serial segments against Kogge and Stone's rounds
+        gpu_ab "${phase#gpu-scan-ab=}" -DSLUICE_KS_SCAN ksscan 90 \
             "^ *(copy|scan|split|compact|partition)" \
             build/bench/bench_streams --skip-bitonic
         ;;

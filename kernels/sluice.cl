@@ -243,6 +243,43 @@ SLUICE_INLINE_ uint8 sluice_group_place_(local uint *t, uint8 x, local uint *at)
     return r;
 }
 
+#ifdef SLUICE_KS_SCAN
+/* sluice_group_place_ for ordered outputs in slots 0 to N - 1 only, N = 2 or
+ * 4 (uint2, uint4): the group's scan in log2(G) rounds of all its
+ * work-items (Kogge and Stone's), each a barrier, in two buffers of N G
+ * words of t, instead of 16 work-items' serial segments. A GPU's work-group
+ * then waits on 8 short rounds (G = 256) rather than on 32 dependent reads
+ * of local memory by a few work-items; the narrower vectors also move a
+ * quarter or half of the words. Unmeasured on a GPU: -DSLUICE_KS_SCAN in
+ * SLUICE_BUILD_OPTIONS turns it on (bench/lent_machine.sh gpu-scan-ab). */
+#define SLUICE_KS_PLACE_(N)                                                                        \
+    SLUICE_INLINE_ uint##N sluice_group_place##N##_(local uint *t, uint##N x, local uint *at)      \
+    {                                                                                              \
+        uint l = (uint)get_local_id(0), g = (uint)get_local_size(0);                               \
+        local uint *src = t, *dst = t + N * g;                                                     \
+        vstore##N(x, l, src);                                                                      \
+        barrier(CLK_LOCAL_MEM_FENCE);                                                              \
+        for (uint off = 1u; off < g; off <<= 1) {                                                  \
+            uint##N v = vload##N(l, src);                                                          \
+            if (l >= off)                                                                          \
+                v += vload##N(l - off, src);                                                       \
+            vstore##N(v, l, dst);                                                                  \
+            barrier(CLK_LOCAL_MEM_FENCE);                                                          \
+            local uint *sw = src;                                                                  \
+            src = dst;                                                                             \
+            dst = sw;                                                                              \
+        }                                                                                          \
+        uint##N base = vload##N(0, at), total = vload##N(g - 1u, src);                             \
+        uint##N r = base + vload##N(l, src) - x; /* the inclusive scan, less its own */            \
+        barrier(CLK_LOCAL_MEM_FENCE); /* t and at are read before they are written again */        \
+        if (l == 0u)                                                                               \
+            vstore##N(base + total, 0, at);                                                        \
+        return r;                                                                                  \
+    }
+SLUICE_KS_PLACE_(2)
+SLUICE_KS_PLACE_(4)
+#endif
+
 /* sluice_group_place_ for the ordered outputs the group places, of the
  * counts cnt - from (from NULL: cnt; none when `none`, which leaves the
  * group's next places as they are): their places. */
@@ -252,7 +289,15 @@ SLUICE_INLINE_ uint8 sluice_group_places_(sluice_state_ *s, const uint *from, ui
     uint *xs = (uint *)&x;
     SLUICE_EACH_OUTPUT_ (k)
         xs[k] = (s->omask >> k) & 1u && !none ? s->cnt[k] - (from ? from[k] : 0u) : 0u;
-    return sluice_group_place_(s->lds + SLUICE_LDS_WORDS_, x, s->lds + SLUICE_MAX_OUTPUTS);
+    local uint *t = s->lds + SLUICE_LDS_WORDS_, *at = s->lds + SLUICE_MAX_OUTPUTS;
+#ifdef SLUICE_KS_SCAN
+    /* the same branch for the whole group: omask is the launch's */
+    if (s->omask < 4u)
+        return (uint8)(sluice_group_place2_(t, x.s01, at), (uint2)(0u), (uint4)(0u));
+    if (s->omask < 16u)
+        return (uint8)(sluice_group_place4_(t, x.lo, at), (uint4)(0u));
+#endif
+    return sluice_group_place_(t, x, at);
 }
 
 /* Into the write pass: where the group steps, into a step's count first;
