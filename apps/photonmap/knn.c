@@ -17,6 +17,9 @@
  *   loop           while the live stream is not empty (sluice_loop watching
  *                  its length: Purcell's occlusion query, 6.3.3):
  *                    pm_knn_pass  one more shell per live query
+ *                    pm_knn_sum   (at-least mode, all shells in one pass)
+ *                                 the estimates of the queries that reached
+ *                                 k photons, 8 queries side by side
  *                    pm_knn_live  the ids not done into `next`; swap
  *
  * The per-query state between passes is the result record itself (sums,
@@ -64,7 +67,9 @@ struct pm_knn {
     sluice_context *ctx;
     sluice_program *prog;
     sluice_kernel *k_gather, *k_bounds, *k_sat[3], *k_order, *k_sortq, *k_unsort, *k_init, *k_pass,
-        *k_live, *k_hash;
+        *k_live, *k_hash, *k_sum;
+    int sum_after; /* this call's pass stops at k photons; pm_knn_sum follows */
+    size_t sum_queries;
     sluice_loop *loop;
     /* scratch kept between calls; streams only grow */
     sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
@@ -106,6 +111,8 @@ static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
     sluice_status st = sluice_stream_clear(knn->next);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(knn->k_pass);
+    if (st == SLUICE_OK && knn->sum_after)
+        st = sluice_kernel_launch_count(knn->k_sum, (knn->sum_queries + 7) / 8);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(knn->k_live);
     if (st == SLUICE_OK)
@@ -143,6 +150,7 @@ void pm_knn_destroy(pm_knn *knn)
     sluice_kernel_destroy(knn->k_pass);
     sluice_kernel_destroy(knn->k_live);
     sluice_kernel_destroy(knn->k_hash);
+    sluice_kernel_destroy(knn->k_sum);
     sluice_program_destroy(knn->prog);
     sluice_stream_destroy(knn->live);
     sluice_stream_destroy(knn->next);
@@ -201,6 +209,8 @@ sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out)
         st = sluice_kernel_create(knn->prog, "pm_knn_live", &knn->k_live);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(knn->prog, "pm_knn_hash", &knn->k_hash);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_sum", &knn->k_sum);
     if (st == SLUICE_OK)
         st = sluice_stream_create(ctx, 4, 1, &knn->live);
     if (st == SLUICE_OK)
@@ -303,6 +313,12 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
     p->shells_per_pass = o->shells_per_pass == PM_KNN_ALL_SHELLS
                              ? 0u
                              : (o->shells_per_pass ? o->shells_per_pass : 1u);
+    /* one pass takes every shell: the at-least radius is fixed at the k-th
+     * photon, and pm_knn_sum gathers within it for 8 queries at a time (the
+     * same photons; the multipass search keeps Purcell's passes, whose hook
+     * shows the estimates growing) */
+    p->stop_at_k = o->mode == PM_KNN_ATLEAST && p->shells_per_pass == 0u &&
+                   v->layout == SR_POINT_GRID_DENSE;
 }
 
 /* Reads the results back into the statistics' means and counts. */
@@ -664,6 +680,23 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         st = sluice_kernel_set_output(knn->k_live, 2, 0, knn->next, SLUICE_UNORDERED);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(knn->k_init, 0, knn->live, 0);
+    knn->sum_after = p.stop_at_k != 0u;
+    knn->sum_queries = n;
+    sluice_stream *sum_args[] = {knn->order,        knn->qsorted, knn->map, map_start,
+                                 v.cell_count};
+    for (unsigned i = 0; st == SLUICE_OK && knn->sum_after && i < 5; ++i)
+        st = sluice_kernel_set_stream(knn->k_sum, i, sum_args[i], 0);
+    uint32_t n32 = (uint32_t)n;
+    if (st == SLUICE_OK && knn->sum_after)
+        st = sluice_kernel_set_arg(knn->k_sum, 5, sizeof g, &g);
+    if (st == SLUICE_OK && knn->sum_after)
+        st = sluice_kernel_set_arg(knn->k_sum, 6, sizeof p, &p);
+    if (st == SLUICE_OK && knn->sum_after)
+        st = sluice_kernel_set_arg(knn->k_sum, 7, sizeof n32, &n32);
+    if (st == SLUICE_OK && knn->sum_after)
+        st = sluice_kernel_set_stream(knn->k_sum, 8, knn->rsorted, 0);
+    if (st == SLUICE_OK && knn->sum_after)
+        st = sluice_kernel_set_stream(knn->k_sum, 9, indices ? indices : knn->dummy, 0);
     if (st != SLUICE_OK)
         goto runtime_fail;
 

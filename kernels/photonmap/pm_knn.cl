@@ -561,13 +561,17 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
     const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
     float8 ar = (float8)(0.0f), ag = (float8)(0.0f), ab = (float8)(0.0f);
     for (int z = b0[2]; z <= b1[2]; ++z) {
+        /* with stop_at_k the radius is fixed at the k-th photon: the rest
+         * is pm_knn_sum's */
+        if (p->stop_at_k && st->count >= p->k)
+            break;
         float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2], p->box_lo[2],
                            p->box_hi[2]);
         if (gz > pm_bound(st, p, exact))
             continue;
         uint plane = (uint)n[0] * (uint)n[1] * (uint)z;
         if (b1[1] - b0[1] + 1 < PM_ROWS8_MIN) {
-            for (int y = b0[1]; y <= b1[1]; ++y) {
+            for (int y = b0[1]; y <= b1[1] && !(p->stop_at_k && st->count >= p->k); ++y) {
                 uint row = plane + (uint)n[0] * (uint)y;
                 if (!pm_row_holds(map_start, cell_count, row, b0[0], b1[0]))
                     continue;
@@ -609,7 +613,7 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
             vstore8(
                 min((int8)b1[0], pm_axis8(st->px + reach, g->lo[0], g->inv_cell[0], g->dims[0])), 0,
                 xbs);
-            while (todo) {
+            while (todo && !(p->stop_at_k && st->count >= p->k)) {
                 int l = popcount((todo & (0u - todo)) - 1u); /* the lowest set bit */
                 todo &= todo - 1u;
                 pm_scan_row(st, plane + (uint)n[0] * (uint)(y0 + l), y0 + l, z, xas[l], xbs[l], p,
@@ -688,7 +692,7 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                     covered &= b0[a] == 0 && b1[a] == n[a] - 1;
                     ext = max(ext, max(qc[a] - b0[a], b1[a] - qc[a]));
                 }
-                if (b0[0] <= b1[0] && b0[1] <= b1[1] && b0[2] <= b1[2])
+                if (b0[0] <= b1[0] && b0[1] <= b1[1] && b0[2] <= b1[2] && !p.stop_at_k)
                     pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices,
                                 qc, s - 1);
                 s = max(s, ext);
@@ -815,6 +819,212 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
         r.sb = st.sb;
         r.r2 = st.r2;
         results[at] = r;
+    }
+}
+
+/* pm_gap2 of cell j for the points x of 8 lanes. */
+static inline float8 pm_gap2_lanes(float8 x, int j, int n, float lo, float cell, float margin,
+                                   float blo, float bhi)
+{
+    float l = j > 0 ? fmax(lo + (float)j * cell, blo) : blo;
+    float h = j < n - 1 ? fmin(lo + (float)(j + 1) * cell, bhi) : bhi;
+    float8 gap = select(select((float8)(0.0f), x - h, x > (float8)(h)), (float8)(l) - x,
+                        x < (float8)(l));
+    gap -= margin;
+    return select((float8)(0.0f), gap * gap, gap > 0.0f);
+}
+
+static inline int pm_hmin8i(int8 v)
+{
+    int4 a = min(v.lo, v.hi);
+    int2 b = min(a.lo, a.hi);
+    return min(b.x, b.y);
+}
+
+static inline int pm_hmax8i(int8 v)
+{
+    int4 a = max(v.lo, v.hi);
+    int2 b = max(a.lo, a.hi);
+    return max(b.x, b.y);
+}
+
+/* pm_knn_sum's test of photon m[0] (planes `stride` apart) for 8 queries:
+ * within the radius (the distance computed as pm_scan_run computes it) and,
+ * with the normal filter, arriving on the query's side. */
+static inline int8 pm_sum_take(global const float *m, uint stride, float8 px, float8 py, float8 pz,
+                               float8 nx, float8 ny, float8 nz, float8 R2, int8 on,
+                               uint normal_filter)
+{
+    float8 dx = m[PM_MAP_X * stride] - px;
+    float8 dy = m[PM_MAP_Y * stride] - py;
+    float8 dz = m[PM_MAP_Z * stride] - pz;
+    float8 d2 = dx * dx + dy * dy + dz * dz;
+    int8 take = on & (d2 <= R2);
+    if (normal_filter)
+        take &= nx * m[PM_MAP_DX * stride] + ny * m[PM_MAP_DY * stride] +
+                    nz * m[PM_MAP_DZ * stride] <
+                (float8)(0.0f);
+    return take;
+}
+
+/* Counts the photon for the queries that take it and adds its power. */
+static inline void pm_sum_add(global const float *m, uint stride, int8 take, int8 *cnt, float8 *sr,
+                              float8 *sg, float8 *sb)
+{
+    *cnt -= take; /* a true lane is -1 */
+    *sr += select((float8)(0.0f), (float8)(m[PM_MAP_R * stride]), take);
+    *sg += select((float8)(0.0f), (float8)(m[PM_MAP_G * stride]), take);
+    *sb += select((float8)(0.0f), (float8)(m[PM_MAP_B * stride]), take);
+}
+
+/* The at-least estimates of queries whose search stopped at k photons
+ * (pm_knn_params.stop_at_k), 8 queries (consecutive in the search order, so
+ * near one another) a work-item. Their radius is fixed: the at-least rule
+ * (pm_scan_run) takes every photon before the k-th, each within the radius
+ * (the farthest of them), and every photon within the radius after it, and
+ * the shells and the sweep reach every cell within the radius; so the
+ * estimate is every photon that passes the filters within the radius, in
+ * any order. Here each row of cells is read once for the 8 queries, each
+ * photon tested against all of them side by side (the lanes are queries),
+ * instead of once per query: the rows, their trims and the branches they
+ * cost are shared. The count and the sums are replaced (the pass's were
+ * partial) and the index list is written anew; r2, shells and the other
+ * flags are the pass's. The distance is computed as pm_scan_run computes it,
+ * so the photon that set the radius is within it here too. */
+__kernel void pm_knn_sum(SLUICE_PARAMS, global const uint *order, global const pm_query *queries,
+                         global const float *map, global const uint *map_start,
+                         global const uint *cell_count, pg_params g, pm_knn_params p, uint n,
+                         global pm_knn_result *results, global uint *indices)
+{
+    SLUICE_FOR_EACH (w) {
+        uint first = w * 8u, stride = p.map_stride;
+        float lx[8], ly[8], lz[8], lnx[8], lny[8], lnz[8], lr2[8];
+        int lon[8], lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1}, any = 0;
+        for (int l = 0; l < 8; ++l) {
+            uint i = first + (uint)l;
+            lx[l] = ly[l] = lz[l] = lnx[l] = lny[l] = lnz[l] = 0.0f;
+            lr2[l] = -1.0f; /* no photon within */
+            lon[l] = 0;
+            if (i >= n)
+                continue;
+            pm_knn_result r = results[i];
+            if (r.count < p.k || (r.flags & PM_KNN_BAD_QUERY))
+                continue;
+            pm_query Q = queries[i];
+            float qp[3] = {Q.px, Q.py, Q.pz};
+            lx[l] = Q.px;
+            ly[l] = Q.py;
+            lz[l] = Q.pz;
+            lnx[l] = Q.nx;
+            lny[l] = Q.ny;
+            lnz[l] = Q.nz;
+            lr2[l] = r.r2;
+            lon[l] = -1;
+            any = 1;
+            /* the cells within reach of the radius, as the sweep trims them */
+            for (int a = 0; a < 3; ++a) {
+                int b0 = 0, b1 = (int)g.dims[a] - 1;
+                pm_trim(qp[a], r.r2, r.r2, g.lo[a], g.inv_cell[a], g.dims[a], p.margin[a], &b0,
+                        &b1);
+                lo[a] = min(lo[a], b0);
+                hi[a] = max(hi[a], b1);
+            }
+        }
+        if (!any)
+            continue;
+        float8 px = vload8(0, lx), py = vload8(0, ly), pz = vload8(0, lz);
+        float8 nx = vload8(0, lnx), ny = vload8(0, lny), nz = vload8(0, lnz);
+        float8 R2 = vload8(0, lr2);
+        int8 on = vload8(0, lon);
+        float8 gx = pm_gap2_lanes(px, 0, 1, g.lo[0], g.cell[0], p.margin[0], p.box_lo[0],
+                                  p.box_hi[0]);
+        int8 cnt = (int8)(0);
+        float8 sr = (float8)(0.0f), sg = (float8)(0.0f), sb = (float8)(0.0f);
+        int flag_cut = 0;
+        uint nx0 = g.dims[0], plane_cells = g.dims[0] * g.dims[1];
+        for (int z = lo[2]; z <= hi[2]; ++z) {
+            float8 gz = pm_gap2_lanes(pz, z, (int)g.dims[2], g.lo[2], g.cell[2], p.margin[2],
+                                      p.box_lo[2], p.box_hi[2]);
+            int8 zon = on & (gz <= R2);
+            if (!sluice_mask8(zon))
+                continue;
+            for (int y = lo[1]; y <= hi[1]; ++y) {
+                uint row = plane_cells * (uint)z + nx0 * (uint)y;
+                if (!pm_row_holds(map_start, cell_count, row, lo[0], hi[0]))
+                    continue;
+                float8 t = R2 - gz -
+                           pm_gap2_lanes(py, y, (int)g.dims[1], g.lo[1], g.cell[1], p.margin[1],
+                                         p.box_lo[1], p.box_hi[1]);
+                int8 ron = zon & (t >= gx);
+                if (!sluice_mask8(ron))
+                    continue;
+                /* the row's cells within reach of any of the queries */
+                float8 reach = PM_REACH_(t, R2, p.margin[0]);
+                int xa = max(lo[0], pm_hmin8i(select((int8)(INT_MAX),
+                                                     pm_axis8(px - reach, g.lo[0], g.inv_cell[0],
+                                                              g.dims[0]),
+                                                     ron)));
+                int xb = min(hi[0], pm_hmax8i(select((int8)(-1),
+                                                     pm_axis8(px + reach, g.lo[0], g.inv_cell[0],
+                                                              g.dims[0]),
+                                                     ron)));
+                if (xa > xb)
+                    continue;
+                uint b = map_start[row + (uint)xa],
+                     e = map_start[row + (uint)xb] + cell_count[row + (uint)xb];
+                global const float *mp = map + b;
+                uint len = e - b;
+                if (p.index_cap) {
+                    for (uint j = 0; j < len; ++j) {
+                        int8 take = pm_sum_take(mp + j, stride, px, py, pz, nx, ny, nz, R2, ron,
+                                                p.normal_filter);
+                        if (!sluice_mask8(take))
+                            continue;
+                        int tk[8], c[8];
+                        vstore8(take, 0, tk);
+                        vstore8(cnt, 0, c);
+                        uint id = as_uint(mp[PM_MAP_ID * stride + j]);
+                        for (int l = 0; l < 8; ++l) {
+                            if (!tk[l])
+                                continue;
+                            if ((uint)c[l] < p.index_cap)
+                                indices[(ulong)order[first + (uint)l] * p.index_cap +
+                                        (uint)c[l]] = id;
+                            else
+                                flag_cut |= 1 << l;
+                        }
+                        pm_sum_add(mp + j, stride, take, &cnt, &sr, &sg, &sb);
+                    }
+                } else if (p.normal_filter) {
+                    for (uint j = 0; j < len; ++j)
+                        pm_sum_add(mp + j, stride,
+                                   pm_sum_take(mp + j, stride, px, py, pz, nx, ny, nz, R2, ron, 1u),
+                                   &cnt, &sr, &sg, &sb);
+                } else {
+                    for (uint j = 0; j < len; ++j)
+                        pm_sum_add(mp + j, stride,
+                                   pm_sum_take(mp + j, stride, px, py, pz, nx, ny, nz, R2, ron, 0u),
+                                   &cnt, &sr, &sg, &sb);
+                }
+            }
+        }
+        int c[8];
+        float fr[8], fg[8], fb[8];
+        vstore8(cnt, 0, c);
+        vstore8(sr, 0, fr);
+        vstore8(sg, 0, fg);
+        vstore8(sb, 0, fb);
+        for (int l = 0; l < 8; ++l) {
+            if (!lon[l])
+                continue;
+            global pm_knn_result *r = results + first + (uint)l;
+            r->count = (uint)c[l];
+            r->sr = fr[l];
+            r->sg = fg[l];
+            r->sb = fb[l];
+            if (flag_cut & (1 << l))
+                r->flags |= PM_KNN_INDICES_CUT;
+        }
     }
 }
 
