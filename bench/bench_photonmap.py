@@ -18,7 +18,8 @@ Each build runs twice: with the defaults (the stream tracer, one kNN shell
 per pass: Purcell's passes) and with the fastest options that give the same
 image ("fast": --exec fused --shells-per-pass all; the tracer's two modes
 give the same hits, and the shells are the same in the same order, so the
-estimates are bit for bit the same: test_raytrace and test_knn check it)."""
+estimates take the same photons, summed in another order: test_raytrace
+and test_knn check it)."""
 import argparse
 import json
 import os

@@ -112,7 +112,8 @@ static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(knn->k_pass);
     if (st == SLUICE_OK && knn->sum_after)
-        st = sluice_kernel_launch_count(knn->k_sum, (knn->sum_queries + 7) / 8);
+        st = sluice_kernel_launch_count(knn->k_sum, (knn->sum_queries + PM_KNN_SUM_QUERIES - 1) /
+                                                        PM_KNN_SUM_QUERIES);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(knn->k_live);
     if (st == SLUICE_OK)
@@ -317,8 +318,8 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
      * photon, and pm_knn_sum gathers within it for 8 queries at a time (the
      * same photons; the multipass search keeps Purcell's passes, whose hook
      * shows the estimates growing) */
-    p->stop_at_k = o->mode == PM_KNN_ATLEAST && p->shells_per_pass == 0u &&
-                   v->layout == SR_POINT_GRID_DENSE;
+    p->stop_at_k =
+        o->mode == PM_KNN_ATLEAST && p->shells_per_pass == 0u && v->layout == SR_POINT_GRID_DENSE;
 }
 
 /* Reads the results back into the statistics' means and counts. */
@@ -682,8 +683,7 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         st = sluice_kernel_set_stream(knn->k_init, 0, knn->live, 0);
     knn->sum_after = p.stop_at_k != 0u;
     knn->sum_queries = n;
-    sluice_stream *sum_args[] = {knn->order,        knn->qsorted, knn->map, map_start,
-                                 v.cell_count};
+    sluice_stream *sum_args[] = {knn->order, knn->qsorted, knn->map, map_start, v.cell_count};
     for (unsigned i = 0; st == SLUICE_OK && knn->sum_after && i < 5; ++i)
         st = sluice_kernel_set_stream(knn->k_sum, i, sum_args[i], 0);
     uint32_t n32 = (uint32_t)n;

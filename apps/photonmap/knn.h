@@ -107,7 +107,10 @@ typedef struct pm_knn_options {
     uint32_t shells_per_pass; /**< shells holding photons each pass explores per
                                    query: 0 or 1 (Purcell's one), N, or
                                    PM_KNN_ALL_SHELLS (one pass: the search runs
-                                   to its end in one launch) */
+                                   to its end in one launch; in at-least mode
+                                   the same photons, radius and count as with
+                                   one shell a pass, the power summed in
+                                   another order) */
 } pm_knn_options;
 
 /** pm_knn_options.shells_per_pass: every shell in one pass. */

@@ -822,69 +822,94 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
     }
 }
 
-/* pm_gap2 of cell j for the points x of 8 lanes. */
-static inline float8 pm_gap2_lanes(float8 x, int j, int n, float lo, float cell, float margin,
-                                   float blo, float bhi)
+/* pm_knn_sum takes PM_KNN_SUM_QUERIES queries (pm_types.h) side by side:
+ * 8 or 16 lanes. */
+#if PM_KNN_SUM_QUERIES == 16
+typedef float16 pm_sumf;
+typedef int16 pm_sumi;
+#define PM_SUM_VLOAD vload16
+#define PM_SUM_VSTORE vstore16
+#define PM_SUM_MASK sluice_mask16
+#define PM_SUM_CONVERT_INT convert_int16
+#else
+typedef float8 pm_sumf;
+typedef int8 pm_sumi;
+#define PM_SUM_VLOAD vload8
+#define PM_SUM_VSTORE vstore8
+#define PM_SUM_MASK sluice_mask8
+#define PM_SUM_CONVERT_INT convert_int8
+#endif
+#define PM_SUM_W PM_KNN_SUM_QUERIES
+
+/* pg_axis of the lanes' points x (as pm_axis8). */
+static inline pm_sumi pm_sum_axis(pm_sumf x, float lo, float inv_cell, uint n)
+{
+    pm_sumf f = (x - lo) * inv_cell;
+    pm_sumi c =
+        select((pm_sumi)((int)n - 1), PM_SUM_CONVERT_INT(f), f < (pm_sumf)((float)(n - 1u)));
+    return select((pm_sumi)0, c, f > (pm_sumf)0.0f);
+}
+
+/* The largest lane (and, of -v, the smallest; no lane is INT_MIN). */
+static inline int pm_sum_hmax(pm_sumi v)
+{
+    int a[PM_SUM_W];
+    PM_SUM_VSTORE(v, 0, a);
+    int m = a[0];
+    for (int l = 1; l < PM_SUM_W; ++l)
+        m = max(m, a[l]);
+    return m;
+}
+
+/* pm_gap2 of cell j for the points x of the lanes. */
+static inline pm_sumf pm_gap2_lanes(pm_sumf x, int j, int n, float lo, float cell, float margin,
+                                    float blo, float bhi)
 {
     float l = j > 0 ? fmax(lo + (float)j * cell, blo) : blo;
     float h = j < n - 1 ? fmin(lo + (float)(j + 1) * cell, bhi) : bhi;
-    float8 gap = select(select((float8)(0.0f), x - h, x > (float8)(h)), (float8)(l) - x,
-                        x < (float8)(l));
+    pm_sumf gap =
+        select(select((pm_sumf)(0.0f), x - h, x > (pm_sumf)(h)), (pm_sumf)(l)-x, x < (pm_sumf)(l));
     gap -= margin;
-    return select((float8)(0.0f), gap * gap, gap > 0.0f);
+    return select((pm_sumf)(0.0f), gap * gap, gap > 0.0f);
 }
 
-static inline int pm_hmin8i(int8 v)
-{
-    int4 a = min(v.lo, v.hi);
-    int2 b = min(a.lo, a.hi);
-    return min(b.x, b.y);
-}
-
-static inline int pm_hmax8i(int8 v)
-{
-    int4 a = max(v.lo, v.hi);
-    int2 b = max(a.lo, a.hi);
-    return max(b.x, b.y);
-}
-
-/* pm_knn_sum's test of photon m[0] (planes `stride` apart) for 8 queries:
+/* pm_knn_sum's test of photon m[0] (planes `stride` apart) for the lanes' queries:
  * within the radius (the distance computed as pm_scan_run computes it) and,
  * with the normal filter, arriving on the query's side. */
-static inline int8 pm_sum_take(global const float *m, uint stride, float8 px, float8 py, float8 pz,
-                               float8 nx, float8 ny, float8 nz, float8 R2, int8 on,
-                               uint normal_filter)
+static inline pm_sumi pm_sum_take(global const float *m, uint stride, pm_sumf px, pm_sumf py,
+                                  pm_sumf pz, pm_sumf nx, pm_sumf ny, pm_sumf nz, pm_sumf R2,
+                                  pm_sumi on, uint normal_filter)
 {
-    float8 dx = m[PM_MAP_X * stride] - px;
-    float8 dy = m[PM_MAP_Y * stride] - py;
-    float8 dz = m[PM_MAP_Z * stride] - pz;
-    float8 d2 = dx * dx + dy * dy + dz * dz;
-    int8 take = on & (d2 <= R2);
+    pm_sumf dx = m[PM_MAP_X * stride] - px;
+    pm_sumf dy = m[PM_MAP_Y * stride] - py;
+    pm_sumf dz = m[PM_MAP_Z * stride] - pz;
+    pm_sumf d2 = dx * dx + dy * dy + dz * dz;
+    pm_sumi take = on & (d2 <= R2);
     if (normal_filter)
-        take &= nx * m[PM_MAP_DX * stride] + ny * m[PM_MAP_DY * stride] +
-                    nz * m[PM_MAP_DZ * stride] <
-                (float8)(0.0f);
+        take &=
+            nx * m[PM_MAP_DX * stride] + ny * m[PM_MAP_DY * stride] + nz * m[PM_MAP_DZ * stride] <
+            (pm_sumf)(0.0f);
     return take;
 }
 
 /* Counts the photon for the queries that take it and adds its power. */
-static inline void pm_sum_add(global const float *m, uint stride, int8 take, int8 *cnt, float8 *sr,
-                              float8 *sg, float8 *sb)
+static inline void pm_sum_add(global const float *m, uint stride, pm_sumi take, pm_sumi *cnt,
+                              pm_sumf *sr, pm_sumf *sg, pm_sumf *sb)
 {
     *cnt -= take; /* a true lane is -1 */
-    *sr += select((float8)(0.0f), (float8)(m[PM_MAP_R * stride]), take);
-    *sg += select((float8)(0.0f), (float8)(m[PM_MAP_G * stride]), take);
-    *sb += select((float8)(0.0f), (float8)(m[PM_MAP_B * stride]), take);
+    *sr += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_R * stride]), take);
+    *sg += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_G * stride]), take);
+    *sb += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_B * stride]), take);
 }
 
 /* The at-least estimates of queries whose search stopped at k photons
- * (pm_knn_params.stop_at_k), 8 queries (consecutive in the search order, so
+ * (pm_knn_params.stop_at_k), PM_KNN_SUM_QUERIES queries (consecutive in the search order, so
  * near one another) a work-item. Their radius is fixed: the at-least rule
  * (pm_scan_run) takes every photon before the k-th, each within the radius
  * (the farthest of them), and every photon within the radius after it, and
  * the shells and the sweep reach every cell within the radius; so the
  * estimate is every photon that passes the filters within the radius, in
- * any order. Here each row of cells is read once for the 8 queries, each
+ * any order. Here each row of cells is read once for all of them, each
  * photon tested against all of them side by side (the lanes are queries),
  * instead of once per query: the rows, their trims and the branches they
  * cost are shared. The count and the sums are replaced (the pass's were
@@ -897,10 +922,11 @@ __kernel void pm_knn_sum(SLUICE_PARAMS, global const uint *order, global const p
                          global pm_knn_result *results, global uint *indices)
 {
     SLUICE_FOR_EACH (w) {
-        uint first = w * 8u, stride = p.map_stride;
-        float lx[8], ly[8], lz[8], lnx[8], lny[8], lnz[8], lr2[8];
-        int lon[8], lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1}, any = 0;
-        for (int l = 0; l < 8; ++l) {
+        uint first = w * PM_SUM_W, stride = p.map_stride;
+        float lx[PM_SUM_W], ly[PM_SUM_W], lz[PM_SUM_W], lnx[PM_SUM_W], lny[PM_SUM_W], lnz[PM_SUM_W],
+            lr2[PM_SUM_W];
+        int lon[PM_SUM_W], lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1}, any = 0;
+        for (int l = 0; l < PM_SUM_W; ++l) {
             uint i = first + (uint)l;
             lx[l] = ly[l] = lz[l] = lnx[l] = lny[l] = lnz[l] = 0.0f;
             lr2[l] = -1.0f; /* no photon within */
@@ -932,42 +958,42 @@ __kernel void pm_knn_sum(SLUICE_PARAMS, global const uint *order, global const p
         }
         if (!any)
             continue;
-        float8 px = vload8(0, lx), py = vload8(0, ly), pz = vload8(0, lz);
-        float8 nx = vload8(0, lnx), ny = vload8(0, lny), nz = vload8(0, lnz);
-        float8 R2 = vload8(0, lr2);
-        int8 on = vload8(0, lon);
-        float8 gx = pm_gap2_lanes(px, 0, 1, g.lo[0], g.cell[0], p.margin[0], p.box_lo[0],
-                                  p.box_hi[0]);
-        int8 cnt = (int8)(0);
-        float8 sr = (float8)(0.0f), sg = (float8)(0.0f), sb = (float8)(0.0f);
+        pm_sumf px = PM_SUM_VLOAD(0, lx), py = PM_SUM_VLOAD(0, ly), pz = PM_SUM_VLOAD(0, lz);
+        pm_sumf nx = PM_SUM_VLOAD(0, lnx), ny = PM_SUM_VLOAD(0, lny), nz = PM_SUM_VLOAD(0, lnz);
+        pm_sumf R2 = PM_SUM_VLOAD(0, lr2);
+        pm_sumi on = PM_SUM_VLOAD(0, lon);
+        pm_sumf gx =
+            pm_gap2_lanes(px, 0, 1, g.lo[0], g.cell[0], p.margin[0], p.box_lo[0], p.box_hi[0]);
+        pm_sumi cnt = (pm_sumi)(0);
+        pm_sumf sr = (pm_sumf)(0.0f), sg = (pm_sumf)(0.0f), sb = (pm_sumf)(0.0f);
         int flag_cut = 0;
         uint nx0 = g.dims[0], plane_cells = g.dims[0] * g.dims[1];
         for (int z = lo[2]; z <= hi[2]; ++z) {
-            float8 gz = pm_gap2_lanes(pz, z, (int)g.dims[2], g.lo[2], g.cell[2], p.margin[2],
-                                      p.box_lo[2], p.box_hi[2]);
-            int8 zon = on & (gz <= R2);
-            if (!sluice_mask8(zon))
+            pm_sumf gz = pm_gap2_lanes(pz, z, (int)g.dims[2], g.lo[2], g.cell[2], p.margin[2],
+                                       p.box_lo[2], p.box_hi[2]);
+            pm_sumi zon = on & (gz <= R2);
+            if (!PM_SUM_MASK(zon))
                 continue;
             for (int y = lo[1]; y <= hi[1]; ++y) {
                 uint row = plane_cells * (uint)z + nx0 * (uint)y;
                 if (!pm_row_holds(map_start, cell_count, row, lo[0], hi[0]))
                     continue;
-                float8 t = R2 - gz -
-                           pm_gap2_lanes(py, y, (int)g.dims[1], g.lo[1], g.cell[1], p.margin[1],
-                                         p.box_lo[1], p.box_hi[1]);
-                int8 ron = zon & (t >= gx);
-                if (!sluice_mask8(ron))
+                pm_sumf t = R2 - gz -
+                            pm_gap2_lanes(py, y, (int)g.dims[1], g.lo[1], g.cell[1], p.margin[1],
+                                          p.box_lo[1], p.box_hi[1]);
+                pm_sumi ron = zon & (t >= gx);
+                if (!PM_SUM_MASK(ron))
                     continue;
                 /* the row's cells within reach of any of the queries */
-                float8 reach = PM_REACH_(t, R2, p.margin[0]);
-                int xa = max(lo[0], pm_hmin8i(select((int8)(INT_MAX),
-                                                     pm_axis8(px - reach, g.lo[0], g.inv_cell[0],
-                                                              g.dims[0]),
-                                                     ron)));
-                int xb = min(hi[0], pm_hmax8i(select((int8)(-1),
-                                                     pm_axis8(px + reach, g.lo[0], g.inv_cell[0],
-                                                              g.dims[0]),
-                                                     ron)));
+                pm_sumf reach = PM_REACH_(t, R2, p.margin[0]);
+                int xa = max(lo[0],
+                             -pm_sum_hmax(-select(
+                                 (pm_sumi)(INT_MAX),
+                                 pm_sum_axis(px - reach, g.lo[0], g.inv_cell[0], g.dims[0]), ron)));
+                int xb = min(hi[0],
+                             pm_sum_hmax(select(
+                                 (pm_sumi)(-1),
+                                 pm_sum_axis(px + reach, g.lo[0], g.inv_cell[0], g.dims[0]), ron)));
                 if (xa > xb)
                     continue;
                 uint b = map_start[row + (uint)xa],
@@ -976,20 +1002,20 @@ __kernel void pm_knn_sum(SLUICE_PARAMS, global const uint *order, global const p
                 uint len = e - b;
                 if (p.index_cap) {
                     for (uint j = 0; j < len; ++j) {
-                        int8 take = pm_sum_take(mp + j, stride, px, py, pz, nx, ny, nz, R2, ron,
-                                                p.normal_filter);
-                        if (!sluice_mask8(take))
+                        pm_sumi take = pm_sum_take(mp + j, stride, px, py, pz, nx, ny, nz, R2, ron,
+                                                   p.normal_filter);
+                        if (!PM_SUM_MASK(take))
                             continue;
-                        int tk[8], c[8];
-                        vstore8(take, 0, tk);
-                        vstore8(cnt, 0, c);
+                        int tk[PM_SUM_W], c[PM_SUM_W];
+                        PM_SUM_VSTORE(take, 0, tk);
+                        PM_SUM_VSTORE(cnt, 0, c);
                         uint id = as_uint(mp[PM_MAP_ID * stride + j]);
-                        for (int l = 0; l < 8; ++l) {
+                        for (int l = 0; l < PM_SUM_W; ++l) {
                             if (!tk[l])
                                 continue;
                             if ((uint)c[l] < p.index_cap)
-                                indices[(ulong)order[first + (uint)l] * p.index_cap +
-                                        (uint)c[l]] = id;
+                                indices[(ulong)order[first + (uint)l] * p.index_cap + (uint)c[l]] =
+                                    id;
                             else
                                 flag_cut |= 1 << l;
                         }
@@ -1008,13 +1034,13 @@ __kernel void pm_knn_sum(SLUICE_PARAMS, global const uint *order, global const p
                 }
             }
         }
-        int c[8];
-        float fr[8], fg[8], fb[8];
-        vstore8(cnt, 0, c);
-        vstore8(sr, 0, fr);
-        vstore8(sg, 0, fg);
-        vstore8(sb, 0, fb);
-        for (int l = 0; l < 8; ++l) {
+        int c[PM_SUM_W];
+        float fr[PM_SUM_W], fg[PM_SUM_W], fb[PM_SUM_W];
+        PM_SUM_VSTORE(cnt, 0, c);
+        PM_SUM_VSTORE(sr, 0, fr);
+        PM_SUM_VSTORE(sg, 0, fg);
+        PM_SUM_VSTORE(sb, 0, fb);
+        for (int l = 0; l < PM_SUM_W; ++l) {
             if (!lon[l])
                 continue;
             global pm_knn_result *r = results + first + (uint)l;

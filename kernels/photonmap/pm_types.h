@@ -92,6 +92,10 @@ typedef struct pm_knn_params {
 #define PM_MAP_ID 9
 #define PM_MAP_PLANES 10
 #define PM_MAP_BLOCK 8
+/** Queries pm_knn_sum takes side by side (8 or 16). */
+#ifndef PM_KNN_SUM_QUERIES
+#define PM_KNN_SUM_QUERIES 16
+#endif
 
 /** rt_ray.flags of a photon ray whose path so far went only through
  *  mirrors and glass (it becomes a PM_PHOTON_CAUSTIC photon). */
