@@ -19,7 +19,7 @@
  *                    pm_knn_pass  one more shell per live query
  *                    pm_knn_sum   (at-least mode, all shells in one pass)
  *                                 the estimates of the queries that reached
- *                                 k photons, 8 queries side by side
+ *                                 k photons, PM_KNN_SUM_QUERIES side by side
  *                    pm_knn_live  the ids not done into `next`; swap
  *
  * The per-query state between passes is the result record itself (sums,
@@ -69,7 +69,6 @@ struct pm_knn {
     sluice_kernel *k_gather, *k_bounds, *k_sat[3], *k_order, *k_sortq, *k_unsort, *k_init, *k_pass,
         *k_live, *k_hash, *k_sum;
     int sum_after; /* this call's pass stops at k photons; pm_knn_sum follows */
-    size_t sum_queries;
     sluice_loop *loop;
     /* scratch kept between calls; streams only grow */
     sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
@@ -112,7 +111,7 @@ static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(knn->k_pass);
     if (st == SLUICE_OK && knn->sum_after)
-        st = sluice_kernel_launch_count(knn->k_sum, (knn->sum_queries + PM_KNN_SUM_QUERIES - 1) /
+        st = sluice_kernel_launch_count(knn->k_sum, (knn->answered + PM_KNN_SUM_QUERIES - 1) /
                                                         PM_KNN_SUM_QUERIES);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(knn->k_live);
@@ -315,7 +314,7 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
                              ? 0u
                              : (o->shells_per_pass ? o->shells_per_pass : 1u);
     /* one pass takes every shell: the at-least radius is fixed at the k-th
-     * photon, and pm_knn_sum gathers within it for 8 queries at a time (the
+     * photon, and pm_knn_sum gathers within it for PM_KNN_SUM_QUERIES at a time (the
      * same photons; the multipass search keeps Purcell's passes, whose hook
      * shows the estimates growing) */
     p->stop_at_k =
@@ -682,21 +681,23 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(knn->k_init, 0, knn->live, 0);
     knn->sum_after = p.stop_at_k != 0u;
-    knn->sum_queries = n;
-    sluice_stream *sum_args[] = {knn->order, knn->qsorted, knn->map, map_start, v.cell_count};
-    for (unsigned i = 0; st == SLUICE_OK && knn->sum_after && i < 5; ++i)
-        st = sluice_kernel_set_stream(knn->k_sum, i, sum_args[i], 0);
-    uint32_t n32 = (uint32_t)n;
-    if (st == SLUICE_OK && knn->sum_after)
-        st = sluice_kernel_set_arg(knn->k_sum, 5, sizeof g, &g);
-    if (st == SLUICE_OK && knn->sum_after)
-        st = sluice_kernel_set_arg(knn->k_sum, 6, sizeof p, &p);
-    if (st == SLUICE_OK && knn->sum_after)
-        st = sluice_kernel_set_arg(knn->k_sum, 7, sizeof n32, &n32);
-    if (st == SLUICE_OK && knn->sum_after)
-        st = sluice_kernel_set_stream(knn->k_sum, 8, knn->rsorted, 0);
-    if (st == SLUICE_OK && knn->sum_after)
-        st = sluice_kernel_set_stream(knn->k_sum, 9, indices ? indices : knn->dummy, 0);
+    if (knn->sum_after) {
+        sluice_kernel *ks = knn->k_sum;
+        sluice_stream *sum_args[] = {knn->order, knn->qsorted, knn->map, map_start, v.cell_count};
+        uint32_t n32 = (uint32_t)n;
+        for (unsigned i = 0; st == SLUICE_OK && i < 5; ++i)
+            st = sluice_kernel_set_stream(ks, i, sum_args[i], 0);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_arg(ks, 5, sizeof g, &g);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_arg(ks, 6, sizeof p, &p);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_arg(ks, 7, sizeof n32, &n32);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_stream(ks, 8, knn->rsorted, 0);
+        if (st == SLUICE_OK)
+            st = sluice_kernel_set_stream(ks, 9, indices ? indices : knn->dummy, 0);
+    }
     if (st != SLUICE_OK)
         goto runtime_fail;
 
