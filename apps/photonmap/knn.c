@@ -67,7 +67,7 @@ struct pm_knn {
     sluice_context *ctx;
     sluice_program *prog;
     sluice_kernel *k_gather, *k_bounds, *k_sat[3], *k_order, *k_sortq, *k_unsort, *k_init, *k_pass,
-        *k_live, *k_hash, *k_sum;
+        *k_live, *k_hash, *k_sum, *k_reach;
     int sum_after; /* this call's pass stops at k photons; pm_knn_sum follows */
     sluice_loop *loop;
     /* scratch kept between calls; streams only grow */
@@ -109,7 +109,10 @@ static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
     pm_knn *knn = user;
     sluice_status st = sluice_stream_clear(knn->next);
     if (st == SLUICE_OK)
-        st = sluice_kernel_launch(knn->k_pass);
+        st = knn->sum_after && pass == 0
+                 ? sluice_kernel_launch_count(
+                       knn->k_reach, (knn->answered + PM_KNN_SUM_QUERIES - 1) / PM_KNN_SUM_QUERIES)
+                 : sluice_kernel_launch(knn->k_pass);
     if (st == SLUICE_OK && knn->sum_after)
         st = sluice_kernel_launch_count(knn->k_sum, (knn->answered + PM_KNN_SUM_QUERIES - 1) /
                                                         PM_KNN_SUM_QUERIES);
@@ -151,6 +154,7 @@ void pm_knn_destroy(pm_knn *knn)
     sluice_kernel_destroy(knn->k_live);
     sluice_kernel_destroy(knn->k_hash);
     sluice_kernel_destroy(knn->k_sum);
+    sluice_kernel_destroy(knn->k_reach);
     sluice_program_destroy(knn->prog);
     sluice_stream_destroy(knn->live);
     sluice_stream_destroy(knn->next);
@@ -211,6 +215,8 @@ sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out)
         st = sluice_kernel_create(knn->prog, "pm_knn_hash", &knn->k_hash);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(knn->prog, "pm_knn_sum", &knn->k_sum);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_create(knn->prog, "pm_knn_reach", &knn->k_reach);
     if (st == SLUICE_OK)
         st = sluice_stream_create(ctx, 4, 1, &knn->live);
     if (st == SLUICE_OK)
@@ -682,21 +688,27 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         st = sluice_kernel_set_stream(knn->k_init, 0, knn->live, 0);
     knn->sum_after = p.stop_at_k != 0u;
     if (knn->sum_after) {
-        sluice_kernel *ks = knn->k_sum;
-        sluice_stream *sum_args[] = {knn->order, knn->qsorted, knn->map, map_start, v.cell_count};
+        /* pm_knn_sum and pm_knn_reach take the same arguments, but for the
+         * summed counts pm_knn_reach takes after the cell counts */
+        sluice_kernel *ks[2] = {knn->k_sum, knn->k_reach};
+        sluice_stream *args[] = {knn->order, knn->qsorted, knn->map,
+                                 map_start,  v.cell_count, knn->sat};
         uint32_t n32 = (uint32_t)n;
-        for (unsigned i = 0; st == SLUICE_OK && i < 5; ++i)
-            st = sluice_kernel_set_stream(ks, i, sum_args[i], 0);
-        if (st == SLUICE_OK)
-            st = sluice_kernel_set_arg(ks, 5, sizeof g, &g);
-        if (st == SLUICE_OK)
-            st = sluice_kernel_set_arg(ks, 6, sizeof p, &p);
-        if (st == SLUICE_OK)
-            st = sluice_kernel_set_arg(ks, 7, sizeof n32, &n32);
-        if (st == SLUICE_OK)
-            st = sluice_kernel_set_stream(ks, 8, knn->rsorted, 0);
-        if (st == SLUICE_OK)
-            st = sluice_kernel_set_stream(ks, 9, indices ? indices : knn->dummy, 0);
+        for (unsigned j = 0; j < 2; ++j) {
+            unsigned a = 0, streams = j ? 6u : 5u;
+            for (; st == SLUICE_OK && a < streams; ++a)
+                st = sluice_kernel_set_stream(ks[j], a, args[a], 0);
+            if (st == SLUICE_OK)
+                st = sluice_kernel_set_arg(ks[j], a, sizeof g, &g);
+            if (st == SLUICE_OK)
+                st = sluice_kernel_set_arg(ks[j], a + 1, sizeof p, &p);
+            if (st == SLUICE_OK)
+                st = sluice_kernel_set_arg(ks[j], a + 2, sizeof n32, &n32);
+            if (st == SLUICE_OK)
+                st = sluice_kernel_set_stream(ks[j], a + 3, knn->rsorted, 0);
+            if (st == SLUICE_OK)
+                st = sluice_kernel_set_stream(ks[j], a + 4, indices ? indices : knn->dummy, 0);
+        }
     }
     if (st != SLUICE_OK)
         goto runtime_fail;

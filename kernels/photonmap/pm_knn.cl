@@ -89,6 +89,62 @@ static inline uint pm_cube_count(global const uint *sat, const int *qc, int s, c
                   min(qc[1] + s, n[1] - 1), max(qc[2] - s, 0), min(qc[2] + s, n[2] - 1));
 }
 
+/* The cells within reach of radius^2 r2 about qp (the sweep's box [b0, b1]):
+ * returns how many shells about qc they span, and sets *covered when they
+ * are the whole grid. */
+static inline int pm_reach_cells(const float *qp, float r2, const int *qc, const int *n,
+                                 const pg_params *g, const pm_knn_params *p, int *b0, int *b1,
+                                 int *covered)
+{
+    int ext = 0;
+    *covered = 1;
+    for (int a = 0; a < 3; ++a) {
+        b0[a] = 0;
+        b1[a] = n[a] - 1;
+        pm_trim(qp[a], r2, r2, g->lo[a], g->inv_cell[a], g->dims[a], p->margin[a], &b0[a], &b1[a]);
+        *covered &= b0[a] == 0 && b1[a] == n[a] - 1;
+        ext = max(ext, max(qc[a] - b0[a], b1[a] - qc[a]));
+    }
+    return ext;
+}
+
+/* The cube of shells 0 .. u about qc, clipped to the grid, as a box. */
+static inline void pm_cube_cells(const int *qc, int u, const int *n, int *b0, int *b1)
+{
+    for (int a = 0; a < 3; ++a) {
+        b0[a] = max(qc[a] - u, 0);
+        b1[a] = min(qc[a] + u, n[a] - 1);
+    }
+}
+
+/* The last shell about qc that holds cells of the grid (at least s). */
+static inline int pm_last_shell(const int *qc, const int *n, int s)
+{
+    for (int a = 0; a < 3; ++a)
+        s = max(s, max(qc[a], n[a] - 1 - qc[a]));
+    return s;
+}
+
+/* Face `side` (0 .. 5: -x, +x, -y, +y, -z, +z) of shell s about cell qc as
+ * a box of cells [b0, b1], each cell of the shell in one face only: the
+ * faces across x whole, those across y without the x faces' cells, those
+ * across z without either. Returns 0 for a face outside the grid, empty or
+ * without photons (by the summed counts). */
+static inline int pm_face(global const uint *sat, const int *qc, int s, const int *n, int side,
+                          int *b0, int *b1)
+{
+    int a = side >> 1, at = (side & 1) ? qc[a] + s : qc[a] - s;
+    if (at < 0 || at >= n[a] || ((side & 1) && s == 0))
+        return 0;
+    for (int c = 0; c < 3; ++c) {
+        /* axes before a: inside the faces already done */
+        b0[c] = c == a ? at : max(qc[c] - s + (c > a ? 0 : 1), 0);
+        b1[c] = c == a ? at : min(qc[c] + s - (c > a ? 0 : 1), n[c] - 1);
+    }
+    return b0[0] <= b1[0] && b0[1] <= b1[1] && b0[2] <= b1[2] &&
+           pm_box(sat, n, b0[0], b1[0], b0[1], b1[1], b0[2], b1[2]) != 0u;
+}
+
 /* The explored cube [qc - s, qc + s]: the square of its inscribed radius d_s
  * (shrunk by the margin), and whether it covers the grid (a side on the
  * grid's boundary is infinitely far: nothing lies beyond it; then d_s is
@@ -682,16 +738,8 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                  * explored (0 .. s - 1) is swept in one step, row by row,
                  * instead of one shell after another, whose faces across x
                  * are rows of one cell each: the same photons. */
-                int b0[3], b1[3], ext = 0;
-                covered = 1;
-                for (int a = 0; a < 3; ++a) {
-                    b0[a] = 0;
-                    b1[a] = n[a] - 1;
-                    pm_trim(qp[a], reach, reach, g.lo[a], g.inv_cell[a], g.dims[a], p.margin[a],
-                            &b0[a], &b1[a]);
-                    covered &= b0[a] == 0 && b1[a] == n[a] - 1;
-                    ext = max(ext, max(qc[a] - b0[a], b1[a] - qc[a]));
-                }
+                int b0[3], b1[3];
+                int ext = pm_reach_cells(qp, reach, qc, n, &g, &p, b0, b1, &covered);
                 if (b0[0] <= b1[0] && b0[1] <= b1[1] && b0[2] <= b1[2] && !p.stop_at_k)
                     pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices,
                                 qc, s - 1);
@@ -720,10 +768,7 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
             }
             if (u > s) {
                 int b0[3], b1[3];
-                for (int a = 0; a < 3; ++a) {
-                    b0[a] = max(qc[a] - u, 0);
-                    b1[a] = min(qc[a] + u, n[a] - 1);
-                }
+                pm_cube_cells(qc, u, n, b0, b1);
                 pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices, qc,
                             s - 1);
                 s = u;
@@ -734,10 +779,7 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                  * pass; the estimate is the same, in fewer passes). */
                 uint at_s = pm_cube_count(sat, qc, s, n);
                 if (at_s == before) {
-                    int lo = s, hi = 0;
-                    for (int a = 0; a < 3; ++a)
-                        hi = max(hi, max(qc[a], n[a] - 1 - qc[a]));
-                    hi = max(hi, lo);
+                    int lo = s, hi = pm_last_shell(qc, n, s);
                     while (lo < hi) {
                         int mid = lo + (hi - lo) / 2, cov;
                         float dm = pm_cube_d2(qp, qc, mid, n, &g, &p, &cov);
@@ -751,32 +793,12 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                     at_s = pm_cube_count(sat, qc, s, n);
                 }
                 if (at_s != before) {
-                    /* the shell's six faces as boxes of cells, each cell once:
-                     * the faces across x whole, those across y without the x
-                     * faces' cells, those across z without either; a face
-                     * without photons (by the summed counts) is skipped */
-                    int lo[3], hi[3], in_lo[3], in_hi[3];
-                    for (int a = 0; a < 3; ++a) {
-                        lo[a] = max(qc[a] - s, 0);
-                        hi[a] = min(qc[a] + s, n[a] - 1);
-                        in_lo[a] = max(qc[a] - s + 1, 0);
-                        in_hi[a] = min(qc[a] + s - 1, n[a] - 1);
-                    }
+                    /* the shell's six faces, each cell once */
                     for (int side = 0; side < 6; ++side) {
-                        int a = side >> 1, at = (side & 1) ? qc[a] + s : qc[a] - s;
-                        if (at < 0 || at >= n[a] || ((side & 1) && s == 0))
-                            continue;
                         int b0[3], b1[3];
-                        for (int c = 0; c < 3; ++c) {
-                            /* axes before a: inside the faces already done */
-                            b0[c] = c == a ? at : (c > a ? lo[c] : in_lo[c]);
-                            b1[c] = c == a ? at : (c > a ? hi[c] : in_hi[c]);
-                        }
-                        if (b0[0] > b1[0] || b0[1] > b1[1] || b0[2] > b1[2] ||
-                            pm_box(sat, n, b0[0], b1[0], b0[1], b1[1], b0[2], b1[2]) == 0u)
-                            continue;
-                        pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count,
-                                    indices, qc, -1);
+                        if (pm_face(sat, qc, s, n, side, b0, b1))
+                            pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count,
+                                        indices, qc, -1);
                     }
                 }
             }
@@ -1050,6 +1072,338 @@ __kernel void pm_knn_sum(SLUICE_PARAMS, global const uint *order, global const p
             r->sb = fb[l];
             if (flag_cut & (1 << l))
                 r->flags |= PM_KNN_INDICES_CUT;
+        }
+    }
+}
+
+/* The lanes' running estimates in pm_knn_reach: one query a lane, all of
+ * them in one cell. */
+typedef struct pm_lanes {
+    pm_sumf px, py, pz, nx, ny, nz, gx;
+    pm_sumf r2, sr, sg, sb;
+    pm_sumi cnt;
+} pm_lanes;
+
+/* pm_cube_d2 for the lanes' points, whose cell is qc for all: the same
+ * arithmetic lane by lane, so the same shells end the same searches. */
+static inline pm_sumf pm_cube_d2_lanes(const pm_lanes *L, const int *qc, int s, const int *n,
+                                       const pg_params *g, const pm_knn_params *p, int *covered)
+{
+    pm_sumf x[3] = {L->px, L->py, L->pz};
+    pm_sumf d = (pm_sumf)(INFINITY), box = (pm_sumf)(0.0f);
+    *covered = 1;
+    for (int a = 0; a < 3; ++a) {
+        if (qc[a] - s > 0) {
+            *covered = 0;
+            d = fmin(d, x[a] - (g->lo[a] + (float)(qc[a] - s) * g->cell[a]) - p->margin[a]);
+        }
+        if (qc[a] + s < n[a] - 1) {
+            *covered = 0;
+            d = fmin(d, g->lo[a] + (float)(qc[a] + s + 1) * g->cell[a] - x[a] - p->margin[a]);
+        }
+        pm_sumf gap = select(select((pm_sumf)(0.0f), x[a] - p->box_hi[a], x[a] > p->box_hi[a]),
+                             p->box_lo[a] - x[a], x[a] < p->box_lo[a]);
+        gap -= p->margin[a];
+        box += select((pm_sumf)(0.0f), gap * gap, gap > 0.0f);
+    }
+    if (*covered)
+        return (pm_sumf)(INFINITY);
+    return fmax(select((pm_sumf)(0.0f), d * d, d > 0.0f), box);
+}
+
+/* The at-least rule for photons map[b .. e) and the lanes `on`, one photon
+ * at a time, in order: a lane still short of k takes every photon that
+ * passes (within the maximum radius and, with the normal filter, arriving
+ * on its side), its radius growing to take it in (pm_scan_run, before the
+ * k-th photon); a lane holding k takes nothing more (stop_at_k). Lanes
+ * short of k list what they take (pm_knn_sum lists anew for the others). */
+__attribute__((always_inline)) static inline void pm_reach_run(pm_lanes *L, pm_sumi on, uint b,
+                                                               uint e, const pm_knn_params *p,
+                                                               global const float *map,
+                                                               global const uint *order, uint first,
+                                                               global uint *indices, int *cut)
+{
+    uint stride = p->map_stride;
+    pm_sumi k = (pm_sumi)((int)p->k);
+    for (uint j = b; j < e; ++j) {
+        global const float *m = map + j;
+        pm_sumf dx = m[PM_MAP_X * stride] - L->px;
+        pm_sumf dy = m[PM_MAP_Y * stride] - L->py;
+        pm_sumf dz = m[PM_MAP_Z * stride] - L->pz;
+        pm_sumf d2 = dx * dx + dy * dy + dz * dz;
+        pm_sumi take = on & (L->cnt < k) & (d2 <= (pm_sumf)(p->max_r2));
+        if (p->normal_filter)
+            take &= L->nx * m[PM_MAP_DX * stride] + L->ny * m[PM_MAP_DY * stride] +
+                        L->nz * m[PM_MAP_DZ * stride] <
+                    (pm_sumf)(0.0f);
+        if (p->index_cap && PM_SUM_MASK(take)) {
+            int tk[PM_SUM_W], c[PM_SUM_W];
+            PM_SUM_VSTORE(take, 0, tk);
+            PM_SUM_VSTORE(L->cnt, 0, c);
+            uint id = as_uint(m[PM_MAP_ID * stride]);
+            for (int l = 0; l < PM_SUM_W; ++l) {
+                if (!tk[l])
+                    continue;
+                if ((uint)c[l] < p->index_cap)
+                    indices[(ulong)order[first + (uint)l] * p->index_cap + (uint)c[l]] = id;
+                else
+                    *cut |= 1 << l;
+            }
+        }
+        L->r2 = select(L->r2, fmax(L->r2, d2), take);
+        pm_sum_add(m, stride, take, &L->cnt, &L->sr, &L->sg, &L->sb);
+    }
+}
+
+/* pm_scan_box for the lanes `on` in lockstep, before the k-th photon (the
+ * bound is the maximum radius): the cells [b0, b1] row by row along x, each
+ * row trimmed to the cells any lane still short of k can reach, and split
+ * about the hole (the cube of half-side `hole` about qc, already explored;
+ * none when hole < 0) as pm_scan_row splits it. So every lane meets its
+ * photons in the order its own scan would, and those it would not meet lie
+ * beyond its reach. Stops when no lane is short of k. */
+static inline void pm_reach_box(pm_lanes *L, pm_sumi on, const int *b0, const int *b1, const int *n,
+                                const int *qc, int hole, const pg_params *g, const pm_knn_params *p,
+                                global const float *map, global const uint *map_start,
+                                global const uint *cell_count, global const uint *order, uint first,
+                                global uint *indices, int *cut)
+{
+    pm_sumi k = (pm_sumi)((int)p->k);
+    pm_sumf bound = (pm_sumf)(p->max_r2);
+    for (int z = b0[2]; z <= b1[2]; ++z) {
+        pm_sumi want = on & (L->cnt < k);
+        if (!PM_SUM_MASK(want))
+            return;
+        pm_sumf gz = pm_gap2_lanes(L->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2], p->box_lo[2],
+                                   p->box_hi[2]);
+        pm_sumi zon = want & (gz <= bound);
+        if (!PM_SUM_MASK(zon))
+            continue;
+        uint plane = (uint)n[0] * (uint)n[1] * (uint)z;
+        for (int y = b0[1]; y <= b1[1]; ++y) {
+            uint row = plane + (uint)n[0] * (uint)y;
+            if (!pm_row_holds(map_start, cell_count, row, b0[0], b1[0]))
+                continue;
+            pm_sumf t = bound - gz -
+                        pm_gap2_lanes(L->py, y, n[1], g->lo[1], g->cell[1], p->margin[1],
+                                      p->box_lo[1], p->box_hi[1]);
+            pm_sumi ron = zon & (L->cnt < k) & (t >= L->gx);
+            if (!PM_SUM_MASK(ron))
+                continue;
+            pm_sumf reach = PM_REACH_(t, bound, p->margin[0]);
+            int xa = max(
+                b0[0], -pm_sum_hmax(-select(
+                           (pm_sumi)(INT_MAX),
+                           pm_sum_axis(L->px - reach, g->lo[0], g->inv_cell[0], g->dims[0]), ron)));
+            int xb = min(
+                b1[0], pm_sum_hmax(select(
+                           (pm_sumi)(-1),
+                           pm_sum_axis(L->px + reach, g->lo[0], g->inv_cell[0], g->dims[0]), ron)));
+            if (xa > xb)
+                continue;
+            int ha = xb + 1, hb = xb;
+            if (hole >= 0 && abs(y - qc[1]) <= hole && abs(z - qc[2]) <= hole) {
+                ha = max(xa, qc[0] - hole);
+                hb = min(xb, qc[0] + hole);
+            }
+            if (ha > hb) {
+                ha = xb + 1;
+                hb = xb;
+            }
+            if (xa < ha)
+                pm_reach_run(L, ron, map_start[row + (uint)xa],
+                             map_start[row + (uint)(ha - 1)] + cell_count[row + (uint)(ha - 1)], p,
+                             map, order, first, indices, cut);
+            if (hb + 1 <= xb)
+                pm_reach_run(L, ron, map_start[row + (uint)(hb + 1)],
+                             map_start[row + (uint)xb] + cell_count[row + (uint)xb], p, map, order,
+                             first, indices, cut);
+        }
+    }
+}
+
+/* The at-least search up to each query's k-th photon (stop_at_k: the pass
+ * of the one-pass search, pm_knn_pass's, for the queries of one cell at a
+ * time), PM_KNN_SUM_QUERIES consecutive places of the search order a
+ * work-item, and those of them in one cell (the order is by cell) in
+ * lockstep, one query a lane. Queries of one cell explore the same shells
+ * and faces, so each photon is read once for all of them and tested side by
+ * side; the choices pm_knn_pass makes per query (how many shells a box
+ * sweeps, where an empty run of shells ends) are made here for all the
+ * lanes at once, the most cautious of theirs: a box only where no lane can
+ * reach k in it, a jump no farther than the nearest lane's end. A lane thus
+ * takes the photons of its own search in its order up to the k-th, and its
+ * search ends at the same shell with the same radius, count, shells and
+ * flags; a query that never holds k photons gets its power summed (in
+ * another order) and its list here, the others get theirs from pm_knn_sum.
+ * Results start zeroed (the call's fill); only the first pass runs it. */
+__kernel void pm_knn_reach(SLUICE_PARAMS, global const uint *order, global const pm_query *queries,
+                           global const float *map, global const uint *map_start,
+                           global const uint *cell_count, global const uint *sat, pg_params g,
+                           pm_knn_params p, uint n, global pm_knn_result *results,
+                           global uint *indices)
+{
+    SLUICE_FOR_EACH (w) {
+        uint first = w * PM_SUM_W;
+        float lx[PM_SUM_W], ly[PM_SUM_W], lz[PM_SUM_W], lnx[PM_SUM_W], lny[PM_SUM_W], lnz[PM_SUM_W];
+        int lane_id[PM_SUM_W], qcs[PM_SUM_W][3];
+        uint key[PM_SUM_W];
+        for (int l = 0; l < PM_SUM_W; ++l) {
+            uint i = first + (uint)l;
+            lx[l] = ly[l] = lz[l] = lnx[l] = lny[l] = lnz[l] = 0.0f;
+            lane_id[l] = l;
+            key[l] = UINT_MAX; /* no query, or a bad one */
+            if (i >= n)
+                continue;
+            pm_query Q = queries[i];
+            if (!pg_finite(Q.px) || !pg_finite(Q.py) || !pg_finite(Q.pz)) {
+                results[i].flags |= PM_KNN_DONE | PM_KNN_BAD_QUERY;
+                continue;
+            }
+            float qp[3] = {Q.px, Q.py, Q.pz};
+            for (int a = 0; a < 3; ++a)
+                qcs[l][a] = (int)pg_axis(qp[a], g.lo[a], g.inv_cell[a], g.dims[a]);
+            key[l] = (uint)qcs[l][0] + g.dims[0] * ((uint)qcs[l][1] + g.dims[1] * (uint)qcs[l][2]);
+            lx[l] = Q.px;
+            ly[l] = Q.py;
+            lz[l] = Q.pz;
+            lnx[l] = Q.nx;
+            lny[l] = Q.ny;
+            lnz[l] = Q.nz;
+        }
+        pm_lanes L;
+        L.px = PM_SUM_VLOAD(0, lx);
+        L.py = PM_SUM_VLOAD(0, ly);
+        L.pz = PM_SUM_VLOAD(0, lz);
+        L.nx = PM_SUM_VLOAD(0, lnx);
+        L.ny = PM_SUM_VLOAD(0, lny);
+        L.nz = PM_SUM_VLOAD(0, lnz);
+        L.gx = pm_gap2_lanes(L.px, 0, 1, g.lo[0], g.cell[0], p.margin[0], p.box_lo[0], p.box_hi[0]);
+        const pm_sumi lane = PM_SUM_VLOAD(0, lane_id);
+        const pm_sumi k = (pm_sumi)((int)p.k);
+        int n3[3] = {(int)g.dims[0], (int)g.dims[1], (int)g.dims[2]};
+        for (int l0 = 0; l0 < PM_SUM_W;) {
+            if (key[l0] == UINT_MAX) {
+                ++l0;
+                continue;
+            }
+            int l1 = l0 + 1;
+            while (l1 < PM_SUM_W && key[l1] == key[l0])
+                ++l1;
+            const int qc[3] = {qcs[l0][0], qcs[l0][1], qcs[l0][2]};
+            pm_sumi on = (lane >= (pm_sumi)(l0)) & (lane < (pm_sumi)(l1));
+            L.r2 = L.sr = L.sg = L.sb = (pm_sumf)(0.0f);
+            L.cnt = (pm_sumi)(0);
+            int sh[PM_SUM_W], fl[PM_SUM_W], cut = 0;
+            pm_sumi live = on;
+            for (int s = 0, step = 0; PM_SUM_MASK(live); ++step) {
+                if (step)
+                    ++s;
+                /* lanes holding k: their search ends here, at the cells
+                 * their radius reaches (pm_knn_pass's full branch) */
+                pm_sumi full = live & (L.cnt >= k);
+                if (PM_SUM_MASK(full)) {
+                    int fm[PM_SUM_W];
+                    float fr2[PM_SUM_W];
+                    PM_SUM_VSTORE(full, 0, fm);
+                    PM_SUM_VSTORE(L.r2, 0, fr2);
+                    for (int l = l0; l < l1; ++l) {
+                        if (!fm[l])
+                            continue;
+                        float qp[3] = {lx[l], ly[l], lz[l]};
+                        int b0[3], b1[3], covered;
+                        int ext = pm_reach_cells(qp, fr2[l], qc, n3, &g, &p, b0, b1, &covered);
+                        sh[l] = max(s, ext) + 1;
+                        fl[l] = PM_KNN_DONE | (covered ? PM_KNN_COVERED_GRID : 0);
+                    }
+                    live &= ~full;
+                    if (!PM_SUM_MASK(live))
+                        break;
+                }
+                /* shells no lane can reach k in: one box */
+                uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n3) : 0u;
+                uint most = (uint)pm_sum_hmax(select((pm_sumi)(0), L.cnt, live));
+                int u = s - 1;
+                for (;;) {
+                    if (most + (pm_cube_count(sat, qc, u + 1, n3) - before) >= p.k)
+                        break;
+                    ++u;
+                    int cov;
+                    pm_sumf du = pm_cube_d2_lanes(&L, qc, u, n3, &g, &p, &cov);
+                    if (cov || PM_SUM_MASK(live & (du >= (pm_sumf)(p.max_r2))))
+                        break;
+                }
+                if (u > s) {
+                    int b0[3], b1[3];
+                    pm_cube_cells(qc, u, n3, b0, b1);
+                    pm_reach_box(&L, live, b0, b1, n3, qc, s - 1, &g, &p, map, map_start,
+                                 cell_count, order, first, indices, &cut);
+                    s = u;
+                } else {
+                    /* empty shells jumped over, to the first that holds
+                     * photons or where a lane's search ends */
+                    uint at_s = pm_cube_count(sat, qc, s, n3);
+                    if (at_s == before) {
+                        int lo = s, hi = pm_last_shell(qc, n3, s);
+                        while (lo < hi) {
+                            int mid = lo + (hi - lo) / 2, cov;
+                            pm_sumf dm = pm_cube_d2_lanes(&L, qc, mid, n3, &g, &p, &cov);
+                            if (pm_cube_count(sat, qc, mid, n3) != before || cov ||
+                                PM_SUM_MASK(live & (dm >= (pm_sumf)(p.max_r2))))
+                                hi = mid;
+                            else
+                                lo = mid + 1;
+                        }
+                        s = lo;
+                        at_s = pm_cube_count(sat, qc, s, n3);
+                    }
+                    if (at_s != before) {
+                        /* the shell's faces, as pm_knn_pass takes them */
+                        for (int side = 0; side < 6; ++side) {
+                            int b0[3], b1[3];
+                            if (pm_face(sat, qc, s, n3, side, b0, b1))
+                                pm_reach_box(&L, live, b0, b1, n3, qc, -1, &g, &p, map, map_start,
+                                             cell_count, order, first, indices, &cut);
+                        }
+                    }
+                }
+                /* each lane's end, as pm_knn_pass decides it */
+                int covered;
+                pm_sumf ds2 = pm_cube_d2_lanes(&L, qc, s, n3, &g, &p, &covered);
+                pm_sumi now_full = L.cnt >= k;
+                pm_sumi done = live & ((pm_sumi)(covered ? -1 : 0) | (ds2 >= (pm_sumf)(p.max_r2)) |
+                                       (now_full & (ds2 >= L.r2)));
+                if (PM_SUM_MASK(done)) {
+                    int dm[PM_SUM_W], fm[PM_SUM_W];
+                    PM_SUM_VSTORE(done, 0, dm);
+                    PM_SUM_VSTORE(now_full, 0, fm);
+                    for (int l = l0; l < l1; ++l)
+                        if (dm[l]) {
+                            sh[l] = s + 1;
+                            fl[l] = PM_KNN_DONE | (covered ? PM_KNN_COVERED_GRID
+                                                           : (fm[l] ? 0 : PM_KNN_HIT_MAX_RADIUS));
+                        }
+                    live &= ~done;
+                }
+            }
+            int c[PM_SUM_W];
+            float fr[PM_SUM_W], fg[PM_SUM_W], fb[PM_SUM_W], f2[PM_SUM_W];
+            PM_SUM_VSTORE(L.cnt, 0, c);
+            PM_SUM_VSTORE(L.sr, 0, fr);
+            PM_SUM_VSTORE(L.sg, 0, fg);
+            PM_SUM_VSTORE(L.sb, 0, fb);
+            PM_SUM_VSTORE(L.r2, 0, f2);
+            for (int l = l0; l < l1; ++l) {
+                global pm_knn_result *r = results + first + (uint)l;
+                r->sr = fr[l];
+                r->sg = fg[l];
+                r->sb = fb[l];
+                r->r2 = f2[l];
+                r->count = (uint)c[l];
+                r->shells = (uint)sh[l];
+                r->flags = (uint)fl[l] | ((cut >> l) & 1 ? PM_KNN_INDICES_CUT : 0u);
+            }
+            l0 = l1;
         }
     }
 }
