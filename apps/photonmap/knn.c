@@ -691,12 +691,12 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         /* pm_knn_sum and pm_knn_reach take the same arguments, but for the
          * summed counts pm_knn_reach takes after the cell counts */
         sluice_kernel *ks[2] = {knn->k_sum, knn->k_reach};
+        uint32_t n32 = (uint32_t)n;
         sluice_stream *args[] = {knn->order, knn->qsorted, knn->map,
                                  map_start,  v.cell_count, knn->sat};
-        uint32_t n32 = (uint32_t)n;
         for (unsigned j = 0; j < 2; ++j) {
-            unsigned a = 0, streams = j ? 6u : 5u;
-            for (; st == SLUICE_OK && a < streams; ++a)
+            unsigned a = 0;
+            for (; st == SLUICE_OK && a < (j ? 6u : 5u); ++a)
                 st = sluice_kernel_set_stream(ks[j], a, args[a], 0);
             if (st == SLUICE_OK)
                 st = sluice_kernel_set_arg(ks[j], a, sizeof g, &g);

@@ -895,33 +895,129 @@ static inline pm_sumf pm_gap2_lanes(pm_sumf x, int j, int n, float lo, float cel
     return select((pm_sumf)(0.0f), gap * gap, gap > 0.0f);
 }
 
-/* pm_knn_sum's test of photon m[0] (planes `stride` apart) for the lanes' queries:
- * within the radius (the distance computed as pm_scan_run computes it) and,
- * with the normal filter, arriving on the query's side. */
-static inline pm_sumi pm_sum_take(global const float *m, uint stride, pm_sumf px, pm_sumf py,
-                                  pm_sumf pz, pm_sumf nx, pm_sumf ny, pm_sumf nz, pm_sumf R2,
-                                  pm_sumi on, uint normal_filter)
+/* Queries side by side, one a lane (pm_knn_sum, pm_knn_reach): where they
+ * are, their squared radius and their running estimates. */
+typedef struct pm_lanes {
+    pm_sumf px, py, pz, nx, ny, nz, gx;
+    pm_sumf r2, sr, sg, sb;
+    pm_sumi cnt;
+} pm_lanes;
+
+/* The lanes' queries: points and normals from arrays of PM_SUM_W. */
+static inline void pm_lanes_load(pm_lanes *L, const float *x, const float *y, const float *z,
+                                 const float *nx, const float *ny, const float *nz,
+                                 const pg_params *g, const pm_knn_params *p)
 {
-    pm_sumf dx = m[PM_MAP_X * stride] - px;
-    pm_sumf dy = m[PM_MAP_Y * stride] - py;
-    pm_sumf dz = m[PM_MAP_Z * stride] - pz;
-    pm_sumf d2 = dx * dx + dy * dy + dz * dz;
-    pm_sumi take = on & (d2 <= R2);
+    L->px = PM_SUM_VLOAD(0, x);
+    L->py = PM_SUM_VLOAD(0, y);
+    L->pz = PM_SUM_VLOAD(0, z);
+    L->nx = PM_SUM_VLOAD(0, nx);
+    L->ny = PM_SUM_VLOAD(0, ny);
+    L->nz = PM_SUM_VLOAD(0, nz);
+    L->gx =
+        pm_gap2_lanes(L->px, 0, 1, g->lo[0], g->cell[0], p->margin[0], p->box_lo[0], p->box_hi[0]);
+}
+
+/* The squared length of (dx, dy, dz), lane by lane: pm_scan_run's
+ * expression, so that the photon that set a radius is within it here too. */
+static inline pm_sumf pm_sum_d2(pm_sumf dx, pm_sumf dy, pm_sumf dz)
+{
+    return dx * dx + dy * dy + dz * dz;
+}
+
+/* The squared distance from the lanes' queries to photon m[0] (planes
+ * `stride` apart). */
+static inline pm_sumf pm_photon_d2(global const float *m, uint stride, const pm_lanes *L)
+{
+    return pm_sum_d2(m[PM_MAP_X * stride] - L->px, m[PM_MAP_Y * stride] - L->py,
+                     m[PM_MAP_Z * stride] - L->pz);
+}
+
+/* The lanes whose query the photon arrives at from the side its normal
+ * faces (the normal filter). */
+static inline pm_sumi pm_facing(global const float *m, uint stride, const pm_lanes *L)
+{
+    return L->nx * m[PM_MAP_DX * stride] + L->ny * m[PM_MAP_DY * stride] +
+               L->nz * m[PM_MAP_DZ * stride] <
+           (pm_sumf)(0.0f);
+}
+
+/* pm_knn_sum's test of photon m[0] for the lanes `on`: within the radius
+ * and, with the normal filter, arriving on the query's side. */
+static inline pm_sumi pm_sum_take(global const float *m, uint stride, const pm_lanes *L, pm_sumi on,
+                                  uint normal_filter)
+{
+    pm_sumi take = on & (pm_photon_d2(m, stride, L) <= L->r2);
     if (normal_filter)
-        take &=
-            nx * m[PM_MAP_DX * stride] + ny * m[PM_MAP_DY * stride] + nz * m[PM_MAP_DZ * stride] <
-            (pm_sumf)(0.0f);
+        take &= pm_facing(m, stride, L);
     return take;
 }
 
-/* Counts the photon for the queries that take it and adds its power. */
-static inline void pm_sum_add(global const float *m, uint stride, pm_sumi take, pm_sumi *cnt,
-                              pm_sumf *sr, pm_sumf *sg, pm_sumf *sb)
+/* Counts the photon for the lanes that take it and adds its power. */
+static inline void pm_sum_add(global const float *m, uint stride, pm_sumi take, pm_lanes *L)
 {
-    *cnt -= take; /* a true lane is -1 */
-    *sr += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_R * stride]), take);
-    *sg += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_G * stride]), take);
-    *sb += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_B * stride]), take);
+    L->cnt -= take; /* a true lane is -1 */
+    L->sr += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_R * stride]), take);
+    L->sg += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_G * stride]), take);
+    L->sb += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_B * stride]), take);
+}
+
+/* Lists photon `id` as photon number cnt of each lane of `take` (lane l the
+ * query at place first + l of the search order), or marks the lane's list
+ * cut (bit l of *cut). */
+static inline void pm_sum_list(pm_sumi take, pm_sumi cnt, uint id, global const uint *order,
+                               uint first, uint cap, global uint *indices, int *cut)
+{
+    int tk[PM_SUM_W], c[PM_SUM_W];
+    PM_SUM_VSTORE(take, 0, tk);
+    PM_SUM_VSTORE(cnt, 0, c);
+    for (int l = 0; l < PM_SUM_W; ++l) {
+        if (!tk[l])
+            continue;
+        if ((uint)c[l] < cap)
+            indices[(ulong)order[first + (uint)l] * cap + (uint)c[l]] = id;
+        else
+            *cut |= 1 << l;
+    }
+}
+
+/* pm_knn_sum over the photons m[0 .. len) for the lanes `on`, one photon at
+ * a time. */
+static inline void pm_sum_run(global const float *m, uint len, uint stride, pm_lanes *L, pm_sumi on,
+                              const pm_knn_params *p, global const uint *order, uint first,
+                              global uint *indices, int *cut)
+{
+    if (p->index_cap) {
+        for (uint j = 0; j < len; ++j) {
+            pm_sumi take = pm_sum_take(m + j, stride, L, on, p->normal_filter);
+            if (!PM_SUM_MASK(take))
+                continue;
+            pm_sum_list(take, L->cnt, as_uint(m[PM_MAP_ID * stride + j]), order, first,
+                        p->index_cap, indices, cut);
+            pm_sum_add(m + j, stride, take, L);
+        }
+    } else if (p->normal_filter) {
+        for (uint j = 0; j < len; ++j)
+            pm_sum_add(m + j, stride, pm_sum_take(m + j, stride, L, on, 1u), L);
+    } else {
+        for (uint j = 0; j < len; ++j)
+            pm_sum_add(m + j, stride, pm_sum_take(m + j, stride, L, on, 0u), L);
+    }
+}
+
+/* The cells [*xa, *xb] of a row (those between lo and hi) within reach of
+ * any lane of `on`: t is what the bound leaves each lane along x. */
+static inline int pm_row_span(const pm_lanes *L, pm_sumf t, pm_sumf bound, pm_sumi on, int lo,
+                              int hi, const pg_params *g, const pm_knn_params *p, int *xa, int *xb)
+{
+    pm_sumf reach = PM_REACH_(t, bound, p->margin[0]);
+    *xa = max(lo, -pm_sum_hmax(-select(
+                      (pm_sumi)(INT_MAX),
+                      pm_sum_axis(L->px - reach, g->lo[0], g->inv_cell[0], g->dims[0]), on)));
+    *xb = min(hi, pm_sum_hmax(select(
+                      (pm_sumi)(-1),
+                      pm_sum_axis(L->px + reach, g->lo[0], g->inv_cell[0], g->dims[0]), on)));
+    return *xa <= *xb;
 }
 
 /* The at-least estimates of queries whose search stopped at k photons
@@ -980,88 +1076,43 @@ __kernel void pm_knn_sum(SLUICE_PARAMS, global const uint *order, global const p
         }
         if (!any)
             continue;
-        pm_sumf px = PM_SUM_VLOAD(0, lx), py = PM_SUM_VLOAD(0, ly), pz = PM_SUM_VLOAD(0, lz);
-        pm_sumf nx = PM_SUM_VLOAD(0, lnx), ny = PM_SUM_VLOAD(0, lny), nz = PM_SUM_VLOAD(0, lnz);
-        pm_sumf R2 = PM_SUM_VLOAD(0, lr2);
+        pm_lanes L;
+        pm_lanes_load(&L, lx, ly, lz, lnx, lny, lnz, &g, &p);
+        L.r2 = PM_SUM_VLOAD(0, lr2);
+        L.cnt = (pm_sumi)(0);
+        L.sr = L.sg = L.sb = (pm_sumf)(0.0f);
         pm_sumi on = PM_SUM_VLOAD(0, lon);
-        pm_sumf gx =
-            pm_gap2_lanes(px, 0, 1, g.lo[0], g.cell[0], p.margin[0], p.box_lo[0], p.box_hi[0]);
-        pm_sumi cnt = (pm_sumi)(0);
-        pm_sumf sr = (pm_sumf)(0.0f), sg = (pm_sumf)(0.0f), sb = (pm_sumf)(0.0f);
         int flag_cut = 0;
         uint nx0 = g.dims[0], plane_cells = g.dims[0] * g.dims[1];
         for (int z = lo[2]; z <= hi[2]; ++z) {
-            pm_sumf gz = pm_gap2_lanes(pz, z, (int)g.dims[2], g.lo[2], g.cell[2], p.margin[2],
+            pm_sumf gz = pm_gap2_lanes(L.pz, z, (int)g.dims[2], g.lo[2], g.cell[2], p.margin[2],
                                        p.box_lo[2], p.box_hi[2]);
-            pm_sumi zon = on & (gz <= R2);
+            pm_sumi zon = on & (gz <= L.r2);
             if (!PM_SUM_MASK(zon))
                 continue;
             for (int y = lo[1]; y <= hi[1]; ++y) {
                 uint row = plane_cells * (uint)z + nx0 * (uint)y;
                 if (!pm_row_holds(map_start, cell_count, row, lo[0], hi[0]))
                     continue;
-                pm_sumf t = R2 - gz -
-                            pm_gap2_lanes(py, y, (int)g.dims[1], g.lo[1], g.cell[1], p.margin[1],
+                pm_sumf t = L.r2 - gz -
+                            pm_gap2_lanes(L.py, y, (int)g.dims[1], g.lo[1], g.cell[1], p.margin[1],
                                           p.box_lo[1], p.box_hi[1]);
-                pm_sumi ron = zon & (t >= gx);
-                if (!PM_SUM_MASK(ron))
-                    continue;
-                /* the row's cells within reach of any of the queries */
-                pm_sumf reach = PM_REACH_(t, R2, p.margin[0]);
-                int xa = max(lo[0],
-                             -pm_sum_hmax(-select(
-                                 (pm_sumi)(INT_MAX),
-                                 pm_sum_axis(px - reach, g.lo[0], g.inv_cell[0], g.dims[0]), ron)));
-                int xb = min(hi[0],
-                             pm_sum_hmax(select(
-                                 (pm_sumi)(-1),
-                                 pm_sum_axis(px + reach, g.lo[0], g.inv_cell[0], g.dims[0]), ron)));
-                if (xa > xb)
+                pm_sumi ron = zon & (t >= L.gx);
+                int xa, xb;
+                if (!PM_SUM_MASK(ron) ||
+                    !pm_row_span(&L, t, L.r2, ron, lo[0], hi[0], &g, &p, &xa, &xb))
                     continue;
                 uint b = map_start[row + (uint)xa],
                      e = map_start[row + (uint)xb] + cell_count[row + (uint)xb];
-                global const float *mp = map + b;
-                uint len = e - b;
-                if (p.index_cap) {
-                    for (uint j = 0; j < len; ++j) {
-                        pm_sumi take = pm_sum_take(mp + j, stride, px, py, pz, nx, ny, nz, R2, ron,
-                                                   p.normal_filter);
-                        if (!PM_SUM_MASK(take))
-                            continue;
-                        int tk[PM_SUM_W], c[PM_SUM_W];
-                        PM_SUM_VSTORE(take, 0, tk);
-                        PM_SUM_VSTORE(cnt, 0, c);
-                        uint id = as_uint(mp[PM_MAP_ID * stride + j]);
-                        for (int l = 0; l < PM_SUM_W; ++l) {
-                            if (!tk[l])
-                                continue;
-                            if ((uint)c[l] < p.index_cap)
-                                indices[(ulong)order[first + (uint)l] * p.index_cap + (uint)c[l]] =
-                                    id;
-                            else
-                                flag_cut |= 1 << l;
-                        }
-                        pm_sum_add(mp + j, stride, take, &cnt, &sr, &sg, &sb);
-                    }
-                } else if (p.normal_filter) {
-                    for (uint j = 0; j < len; ++j)
-                        pm_sum_add(mp + j, stride,
-                                   pm_sum_take(mp + j, stride, px, py, pz, nx, ny, nz, R2, ron, 1u),
-                                   &cnt, &sr, &sg, &sb);
-                } else {
-                    for (uint j = 0; j < len; ++j)
-                        pm_sum_add(mp + j, stride,
-                                   pm_sum_take(mp + j, stride, px, py, pz, nx, ny, nz, R2, ron, 0u),
-                                   &cnt, &sr, &sg, &sb);
-                }
+                pm_sum_run(map + b, e - b, stride, &L, ron, &p, order, first, indices, &flag_cut);
             }
         }
         int c[PM_SUM_W];
         float fr[PM_SUM_W], fg[PM_SUM_W], fb[PM_SUM_W];
-        PM_SUM_VSTORE(cnt, 0, c);
-        PM_SUM_VSTORE(sr, 0, fr);
-        PM_SUM_VSTORE(sg, 0, fg);
-        PM_SUM_VSTORE(sb, 0, fb);
+        PM_SUM_VSTORE(L.cnt, 0, c);
+        PM_SUM_VSTORE(L.sr, 0, fr);
+        PM_SUM_VSTORE(L.sg, 0, fg);
+        PM_SUM_VSTORE(L.sb, 0, fb);
         for (int l = 0; l < PM_SUM_W; ++l) {
             if (!lon[l])
                 continue;
@@ -1075,14 +1126,6 @@ __kernel void pm_knn_sum(SLUICE_PARAMS, global const uint *order, global const p
         }
     }
 }
-
-/* The lanes' running estimates in pm_knn_reach: one query a lane, all of
- * them in one cell. */
-typedef struct pm_lanes {
-    pm_sumf px, py, pz, nx, ny, nz, gx;
-    pm_sumf r2, sr, sg, sb;
-    pm_sumi cnt;
-} pm_lanes;
 
 /* pm_cube_d2 for the lanes' points, whose cell is qc for all: the same
  * arithmetic lane by lane, so the same shells end the same searches. */
@@ -1127,31 +1170,15 @@ __attribute__((always_inline)) static inline void pm_reach_run(pm_lanes *L, pm_s
     pm_sumi k = (pm_sumi)((int)p->k);
     for (uint j = b; j < e; ++j) {
         global const float *m = map + j;
-        pm_sumf dx = m[PM_MAP_X * stride] - L->px;
-        pm_sumf dy = m[PM_MAP_Y * stride] - L->py;
-        pm_sumf dz = m[PM_MAP_Z * stride] - L->pz;
-        pm_sumf d2 = dx * dx + dy * dy + dz * dz;
+        pm_sumf d2 = pm_photon_d2(m, stride, L);
         pm_sumi take = on & (L->cnt < k) & (d2 <= (pm_sumf)(p->max_r2));
         if (p->normal_filter)
-            take &= L->nx * m[PM_MAP_DX * stride] + L->ny * m[PM_MAP_DY * stride] +
-                        L->nz * m[PM_MAP_DZ * stride] <
-                    (pm_sumf)(0.0f);
-        if (p->index_cap && PM_SUM_MASK(take)) {
-            int tk[PM_SUM_W], c[PM_SUM_W];
-            PM_SUM_VSTORE(take, 0, tk);
-            PM_SUM_VSTORE(L->cnt, 0, c);
-            uint id = as_uint(m[PM_MAP_ID * stride]);
-            for (int l = 0; l < PM_SUM_W; ++l) {
-                if (!tk[l])
-                    continue;
-                if ((uint)c[l] < p->index_cap)
-                    indices[(ulong)order[first + (uint)l] * p->index_cap + (uint)c[l]] = id;
-                else
-                    *cut |= 1 << l;
-            }
-        }
+            take &= pm_facing(m, stride, L);
+        if (p->index_cap && PM_SUM_MASK(take))
+            pm_sum_list(take, L->cnt, as_uint(m[PM_MAP_ID * stride]), order, first, p->index_cap,
+                        indices, cut);
         L->r2 = select(L->r2, fmax(L->r2, d2), take);
-        pm_sum_add(m, stride, take, &L->cnt, &L->sr, &L->sg, &L->sb);
+        pm_sum_add(m, stride, take, L);
     }
 }
 
@@ -1190,16 +1217,8 @@ static inline void pm_reach_box(pm_lanes *L, pm_sumi on, const int *b0, const in
             pm_sumi ron = zon & (L->cnt < k) & (t >= L->gx);
             if (!PM_SUM_MASK(ron))
                 continue;
-            pm_sumf reach = PM_REACH_(t, bound, p->margin[0]);
-            int xa = max(
-                b0[0], -pm_sum_hmax(-select(
-                           (pm_sumi)(INT_MAX),
-                           pm_sum_axis(L->px - reach, g->lo[0], g->inv_cell[0], g->dims[0]), ron)));
-            int xb = min(
-                b1[0], pm_sum_hmax(select(
-                           (pm_sumi)(-1),
-                           pm_sum_axis(L->px + reach, g->lo[0], g->inv_cell[0], g->dims[0]), ron)));
-            if (xa > xb)
+            int xa, xb;
+            if (!pm_row_span(L, t, bound, ron, b0[0], b1[0], g, p, &xa, &xb))
                 continue;
             int ha = xb + 1, hb = xb;
             if (hole >= 0 && abs(y - qc[1]) <= hole && abs(z - qc[2]) <= hole) {
@@ -1272,13 +1291,7 @@ __kernel void pm_knn_reach(SLUICE_PARAMS, global const uint *order, global const
             lnz[l] = Q.nz;
         }
         pm_lanes L;
-        L.px = PM_SUM_VLOAD(0, lx);
-        L.py = PM_SUM_VLOAD(0, ly);
-        L.pz = PM_SUM_VLOAD(0, lz);
-        L.nx = PM_SUM_VLOAD(0, lnx);
-        L.ny = PM_SUM_VLOAD(0, lny);
-        L.nz = PM_SUM_VLOAD(0, lnz);
-        L.gx = pm_gap2_lanes(L.px, 0, 1, g.lo[0], g.cell[0], p.margin[0], p.box_lo[0], p.box_hi[0]);
+        pm_lanes_load(&L, lx, ly, lz, lnx, lny, lnz, &g, &p);
         const pm_sumi lane = PM_SUM_VLOAD(0, lane_id);
         const pm_sumi k = (pm_sumi)((int)p.k);
         int n3[3] = {(int)g.dims[0], (int)g.dims[1], (int)g.dims[2]};
