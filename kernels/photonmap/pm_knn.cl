@@ -920,14 +920,15 @@ static inline void pm_lanes_load(pm_lanes *L, const float *x, const float *y, co
 
 /* The squared length of (dx, dy, dz), lane by lane: pm_scan_run's
  * expression, so that the photon that set a radius is within it here too. */
-static inline pm_sumf pm_sum_d2(pm_sumf dx, pm_sumf dy, pm_sumf dz)
+__attribute__((always_inline)) static inline pm_sumf pm_sum_d2(pm_sumf dx, pm_sumf dy, pm_sumf dz)
 {
     return dx * dx + dy * dy + dz * dz;
 }
 
 /* The squared distance from the lanes' queries to photon m[0] (planes
  * `stride` apart). */
-static inline pm_sumf pm_photon_d2(global const float *m, uint stride, const pm_lanes *L)
+__attribute__((always_inline)) static inline pm_sumf pm_photon_d2(global const float *m,
+                                                                  uint stride, const pm_lanes *L)
 {
     return pm_sum_d2(m[PM_MAP_X * stride] - L->px, m[PM_MAP_Y * stride] - L->py,
                      m[PM_MAP_Z * stride] - L->pz);
@@ -935,7 +936,8 @@ static inline pm_sumf pm_photon_d2(global const float *m, uint stride, const pm_
 
 /* The lanes whose query the photon arrives at from the side its normal
  * faces (the normal filter). */
-static inline pm_sumi pm_facing(global const float *m, uint stride, const pm_lanes *L)
+__attribute__((always_inline)) static inline pm_sumi pm_facing(global const float *m, uint stride,
+                                                               const pm_lanes *L)
 {
     return L->nx * m[PM_MAP_DX * stride] + L->ny * m[PM_MAP_DY * stride] +
                L->nz * m[PM_MAP_DZ * stride] <
@@ -944,8 +946,8 @@ static inline pm_sumi pm_facing(global const float *m, uint stride, const pm_lan
 
 /* pm_knn_sum's test of photon m[0] for the lanes `on`: within the radius
  * and, with the normal filter, arriving on the query's side. */
-static inline pm_sumi pm_sum_take(global const float *m, uint stride, const pm_lanes *L, pm_sumi on,
-                                  uint normal_filter)
+__attribute__((always_inline)) static inline pm_sumi
+pm_sum_take(global const float *m, uint stride, const pm_lanes *L, pm_sumi on, uint normal_filter)
 {
     pm_sumi take = on & (pm_photon_d2(m, stride, L) <= L->r2);
     if (normal_filter)
@@ -954,7 +956,8 @@ static inline pm_sumi pm_sum_take(global const float *m, uint stride, const pm_l
 }
 
 /* Counts the photon for the lanes that take it and adds its power. */
-static inline void pm_sum_add(global const float *m, uint stride, pm_sumi take, pm_lanes *L)
+__attribute__((always_inline)) static inline void pm_sum_add(global const float *m, uint stride,
+                                                             pm_sumi take, pm_lanes *L)
 {
     L->cnt -= take; /* a true lane is -1 */
     L->sr += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_R * stride]), take);
@@ -965,8 +968,10 @@ static inline void pm_sum_add(global const float *m, uint stride, pm_sumi take, 
 /* Lists photon `id` as photon number cnt of each lane of `take` (lane l the
  * query at place first + l of the search order), or marks the lane's list
  * cut (bit l of *cut). */
-static inline void pm_sum_list(pm_sumi take, pm_sumi cnt, uint id, global const uint *order,
-                               uint first, uint cap, global uint *indices, int *cut)
+__attribute__((always_inline)) static inline void pm_sum_list(pm_sumi take, pm_sumi cnt, uint id,
+                                                              global const uint *order, uint first,
+                                                              uint cap, global uint *indices,
+                                                              int *cut)
 {
     int tk[PM_SUM_W], c[PM_SUM_W];
     PM_SUM_VSTORE(take, 0, tk);
@@ -983,9 +988,11 @@ static inline void pm_sum_list(pm_sumi take, pm_sumi cnt, uint id, global const 
 
 /* pm_knn_sum over the photons m[0 .. len) for the lanes `on`, one photon at
  * a time. */
-static inline void pm_sum_run(global const float *m, uint len, uint stride, pm_lanes *L, pm_sumi on,
-                              const pm_knn_params *p, global const uint *order, uint first,
-                              global uint *indices, int *cut)
+__attribute__((always_inline)) static inline void pm_sum_run(global const float *m, uint len,
+                                                             uint stride, pm_lanes *L, pm_sumi on,
+                                                             const pm_knn_params *p,
+                                                             global const uint *order, uint first,
+                                                             global uint *indices, int *cut)
 {
     if (p->index_cap) {
         for (uint j = 0; j < len; ++j) {
@@ -1007,8 +1014,9 @@ static inline void pm_sum_run(global const float *m, uint len, uint stride, pm_l
 
 /* The cells [*xa, *xb] of a row (those between lo and hi) within reach of
  * any lane of `on`: t is what the bound leaves each lane along x. */
-static inline int pm_row_span(const pm_lanes *L, pm_sumf t, pm_sumf bound, pm_sumi on, int lo,
-                              int hi, const pg_params *g, const pm_knn_params *p, int *xa, int *xb)
+__attribute__((always_inline)) static inline int
+pm_row_span(const pm_lanes *L, pm_sumf t, pm_sumf bound, pm_sumi on, int lo, int hi,
+            const pg_params *g, const pm_knn_params *p, int *xa, int *xb)
 {
     pm_sumf reach = PM_REACH_(t, bound, p->margin[0]);
     *xa = max(lo, -pm_sum_hmax(-select(
