@@ -16,10 +16,14 @@
  *                  once per call, all of them)
  *   loop           while the live stream is not empty (sluice_loop watching
  *                  its length: Purcell's occlusion query, 6.3.3):
- *                    pm_knn_pass  one more shell per live query
- *                    pm_knn_sum   (at-least mode, all shells in one pass)
- *                                 the estimates of the queries that reached
- *                                 k photons, PM_KNN_SUM_QUERIES side by side
+ *                    pm_knn_pass  one more shell per live query; or, in
+ *                                 at-least mode with all shells in one pass
+ *                                 (one pass), pm_knn_reach: the search up to
+ *                                 the k-th photon, the queries of one cell
+ *                                 in lockstep, PM_KNN_SUM_QUERIES at most
+ *                    pm_knn_sum   (the same one pass) the estimates of the
+ *                                 queries that reached k photons,
+ *                                 PM_KNN_SUM_QUERIES side by side
  *                    pm_knn_live  the ids not done into `next`; swap
  *
  * The per-query state between passes is the result record itself (sums,
