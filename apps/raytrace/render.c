@@ -18,6 +18,9 @@
 /* Shade counters (rt_shade.cl). */
 enum { SC_SHADES = 0, SC_SHADOW, SC_REFLECT, SC_REFRACT, SC_PATH, SC_NONFINITE, SC_COUNT };
 
+/* Fused direct light counters (rt_direct.cl). */
+enum { DC_SHADOW = 0, DC_NONFINITE, DC_VOXELS, DC_TESTS, DC_SLICES, DC_SLICES_SKIPPED, DC_COUNT };
+
 struct rt_renderer {
     rt_tracer *t;
     rt_render_options opt;
@@ -26,6 +29,11 @@ struct rt_renderer {
     sluice_program *program; /* camera.cl and rt_shade.cl, built for the mode and scene */
     sluice_kernel *k_raygen, *k_shade, *k_resolve;
     sluice_counters *counters;
+    /* the fused mode's direct light from area lights (rt_direct.cl): each
+     * hit's shadow rays traced where they are made, not as a stream */
+    int direct;
+    sluice_kernel *k_direct;
+    sluice_counters *direct_counters; /* DC_* */
     sr_film *film;
     sr_adaptive *sampling;
     sluice_stream *rays, *next, *hits, *shadow, *shadow_hits;
@@ -42,8 +50,10 @@ void rt_renderer_destroy(rt_renderer *r)
     sluice_kernel_destroy(r->k_raygen);
     sluice_kernel_destroy(r->k_shade);
     sluice_kernel_destroy(r->k_resolve);
+    sluice_kernel_destroy(r->k_direct);
     sluice_program_destroy(r->program);
     sluice_counters_destroy(r->counters);
+    sluice_counters_destroy(r->direct_counters);
     sr_film_destroy(r->film);
     sr_adaptive_destroy(r->sampling);
     sluice_stream *s[] = {r->rays, r->next, r->hits, r->shadow, r->shadow_hits, r->gather};
@@ -73,11 +83,12 @@ static sluice_status build_program(rt_renderer *r, const sr_scene_stats *ss)
     int traces_specular = mode == RT_MODE_WHITTED || mode == RT_MODE_PATH;
     int mirror = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_MIRROR));
     int glass = traces_specular && (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_GLASS));
-    char opts[160];
-    snprintf(opts, sizeof opts, "%s%s%s%s%s", r->opt.gather ? " -DRT_GATHER" : "",
+    char opts[640];
+    snprintf(opts, sizeof opts, "%s%s%s%s%s%s%s", r->opt.gather ? " -DRT_GATHER" : "",
              r->ds->layout == SR_TRI_VERTICES ? " -DRT_WATERTIGHT" : "",
              mirror ? " -DRT_HAS_MIRROR" : "", glass ? " -DRT_HAS_GLASS" : "",
-             ss->has_normals ? " -DRT_HAS_NORMALS" : "");
+             ss->has_normals ? " -DRT_HAS_NORMALS" : "", r->direct ? " -DRT_DIRECT_FUSED " : "",
+             r->direct ? rt_tracer_build_options(r->t) : "");
     char *k = r->skipped;
     size_t n = sizeof r->skipped;
     k[0] = '\0';
@@ -94,10 +105,14 @@ static sluice_status build_program(rt_renderer *r, const sr_scene_stats *ss)
                    "area-light sampling (none)");
     sr_skipped_add(k, n, mode == RT_MODE_CAST, "shadow pass (cast mode)");
     sr_skipped_add(k, n, !ss->has_normals, "normal interpolation (no vertex normals)");
-    static const char *const names[] = {"rt_types.h", "triangle.cl", "rng.cl",    "film.cl",
-                                        "surface.cl", "lights.cl",   "camera.cl", "rt_shade.cl"};
-    sluice_status st =
-        sr_program_create(r->ds->ctx, names, sizeof names / sizeof *names, opts, &r->program);
+    sr_skipped_add(k, n, r->direct,
+                   "area-light shadow-ray streams (fused: traced where they are made)");
+    /* the fused direct light also takes the tracer's packet code */
+    static const char *const names[] = {
+        "rt_types.h", "triangle.cl", "rng.cl",      "film.cl",     "surface.cl",  "lights.cl",
+        "camera.cl",  "rt_shade.cl", "rt_trace.cl", "rt_lanes.cl", "rt_fused.cl", "rt_direct.cl"};
+    size_t count = r->direct ? sizeof names / sizeof *names : 8;
+    sluice_status st = sr_program_create(r->ds->ctx, names, count, opts, &r->program);
     if (st == SLUICE_OK)
         st = sluice_program_build(r->program);
     return st;
@@ -143,8 +158,10 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     int specular_kinds = (ss->kinds_present &
                           (SR_KIND_BIT(SR_MATERIAL_MIRROR) | SR_KIND_BIT(SR_MATERIAL_GLASS))) != 0;
     int glass = (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_GLASS)) != 0;
-    r->per_shadow =
-        mode == RT_MODE_CAST ? 0 : ss->point_lights + (al.count ? opt->light_samples : 0);
+    r->direct = mode != RT_MODE_CAST && al.count && opt->light_samples && rt_tracer_packets(t);
+    r->per_shadow = mode == RT_MODE_CAST
+                        ? 0
+                        : ss->point_lights + (al.count && !r->direct ? opt->light_samples : 0);
     r->per_secondary =
         mode == RT_MODE_PATH ? 1 : (mode == RT_MODE_WHITTED && specular_kinds ? 1 : 0);
     if (glass && mode == RT_MODE_WHITTED)
@@ -163,6 +180,16 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
                                         "refract", "path",   "nonfinite"};
     if (st == SLUICE_OK)
         st = sluice_counters_create(ctx, SC_COUNT, names, &r->counters);
+    static const char *const direct_names[] = {"shadow", "nonfinite", "voxels",
+                                               "tests",  "slices",    "slices_skipped"};
+    if (st == SLUICE_OK && r->direct)
+        st = sluice_kernel_create(r->program, "rt_direct", &r->k_direct);
+    if (st == SLUICE_OK && r->direct) /* hits that see the light cost many times the others */
+        st = sluice_kernel_set_uneven(r->k_direct, 1);
+    if (st == SLUICE_OK && r->direct)
+        st = sluice_counters_create(ctx, DC_COUNT, direct_names, &r->direct_counters);
+    if (st == SLUICE_OK && r->direct)
+        st = sluice_kernel_set_counters(r->k_direct, r->direct_counters);
     size_t shadow_cap = r->per_shadow ? pixels * r->per_shadow : 1;
     if (shadow_cap > RT_SHADOW_CAP)
         shadow_cap = RT_SHADOW_CAP > r->per_shadow ? RT_SHADOW_CAP : r->per_shadow;
@@ -207,6 +234,42 @@ static sluice_status ensure(sluice_stream *s, size_t n)
     return sluice_stream_capacity(s) >= n ? SLUICE_OK : sluice_stream_grow(s, n);
 }
 
+/* The fused mode's direct light for rays [base, base + count) of the wave
+ * (rt_direct.cl): the same arguments as rt_shade's but the outputs, then
+ * the tracer's. */
+static sluice_status direct_slice(rt_renderer *r, size_t base, size_t count)
+{
+    sluice_kernel *k = r->k_direct;
+    uint32_t b = (uint32_t)base;
+    const sr_device_scene *ds = rt_tracer_scene(r->t);
+    sluice_stream *bufs[] = {
+        sr_film_accum(r->film), ds->tri_records, ds->indices, ds->normals, ds->tri_mat,
+        ds->materials,          ds->area_tris,   ds->area_cdf};
+    sluice_status st = sluice_kernel_set_stream(k, 0, r->rays, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, 1, r->hits, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 2, sizeof b, &b);
+    for (unsigned i = 0; i < 8 && st == SLUICE_OK; ++i)
+        st = sluice_kernel_set_stream(k, 3 + i, bufs[i], 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, 11, sizeof r->frame, &r->frame);
+    if (st == SLUICE_OK)
+        st = rt_tracer_bind_packets(r->t, k, 12);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_launch_count(k, count);
+    uint32_t c[DC_COUNT];
+    if (st == SLUICE_OK)
+        st = sluice_counters_read_restart(r->direct_counters, c);
+    if (st != SLUICE_OK)
+        return st;
+    r->stats.rays[RT_KIND_SHADOW] += c[DC_SHADOW];
+    r->stats.nonfinite += c[DC_NONFINITE];
+    rt_tracer_add_traced(r->t, c[DC_SHADOW], c[DC_VOXELS], c[DC_TESTS], c[DC_SLICES],
+                         c[DC_SLICES_SKIPPED]);
+    return SLUICE_OK;
+}
+
 static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
 {
     rt_tracer *t = r->t;
@@ -241,6 +304,8 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
         st = sluice_kernel_set_output(k, 15, 2, r->gather, SLUICE_UNORDERED);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch_count(k, count);
+    if (st == SLUICE_OK && r->direct)
+        st = direct_slice(r, base, count);
     size_t ns = 0;
     if (st == SLUICE_OK && r->per_shadow)
         st = sluice_stream_length(r->shadow, &ns);

@@ -3,6 +3,27 @@
  * alternative to one pass per step). */
 #include "tracer_internal.h"
 
+/* The arguments rt_packet_trace reads, from argument `first` of k on. */
+static sluice_status bind_packets(rt_tracer *t, sluice_kernel *k, unsigned first)
+{
+    sluice_status st = sluice_kernel_set_stream(k, first, t->maxima, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, first + 1, t->grid.cell_start, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, first + 2, t->grid.cell_tris, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, first + 3, t->ds->tri_records, 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, first + 4, sizeof t->grid_args, &t->grid_args);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_stream(k, first + 5,
+                                      t->list_records ? t->list_records : t->ds->tri_records, 0);
+    if (st == SLUICE_OK) /* any stream where the kernel reads no macro cells */
+        st = sluice_kernel_set_stream(k, first + 6,
+                                      t->macro_cells ? t->macro_cells : t->grid.cell_start, 0);
+    return st;
+}
+
 sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice_stream *hits)
 {
     sluice_kernel *k = t->k_fused;
@@ -13,21 +34,7 @@ sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 1, hits, 1);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, 2, t->maxima, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, 3, t->grid.cell_start, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, 4, t->grid.cell_tris, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, 5, t->ds->tri_records, 0);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_arg(k, 6, sizeof t->grid_args, &t->grid_args);
-    if (st == SLUICE_OK)
-        st = sluice_kernel_set_stream(k, 7, t->list_records ? t->list_records : t->ds->tri_records,
-                                      0);
-    if (st == SLUICE_OK) /* any stream where the kernel reads no macro cells */
-        st =
-            sluice_kernel_set_stream(k, 8, t->macro_cells ? t->macro_cells : t->grid.cell_start, 0);
+        st = bind_packets(t, k, 2);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch(k);
     uint32_t c[RT_CTR_TRACE_COUNT];
@@ -42,4 +49,33 @@ sluice_status rt_fused_trace(rt_tracer *t, sluice_stream *rays, size_t n, sluice
     t->stats.slices_skipped += c[RT_CTR_SLICES_SKIPPED];
     t->stats.passes += 1;
     return SLUICE_OK;
+}
+
+int rt_tracer_packets(const rt_tracer *t)
+{
+    return t && t->opt.exec == RT_EXEC_FUSED && t->opt.intersector == RT_ISECT_MT;
+}
+
+const char *rt_tracer_build_options(const rt_tracer *t)
+{
+    return t ? t->build_options : "";
+}
+
+sluice_status rt_tracer_bind_packets(rt_tracer *t, sluice_kernel *k, unsigned first)
+{
+    if (!rt_tracer_packets(t) || !k)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    return bind_packets(t, k, first);
+}
+
+void rt_tracer_add_traced(rt_tracer *t, uint64_t rays, uint64_t voxels, uint64_t tests,
+                          uint64_t slices, uint64_t slices_skipped)
+{
+    if (!t)
+        return;
+    t->stats.rays += rays;
+    t->stats.voxels += voxels;
+    t->stats.tests += tests;
+    t->stats.slices += slices;
+    t->stats.slices_skipped += slices_skipped;
 }

@@ -280,7 +280,7 @@ static sluice_status build_list_copy(rt_tracer *t)
 
 static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
 {
-    char opts[384], walk[160] = "", slices[64];
+    char *opts = t->build_options, walk[160] = "", slices[64];
     snprintf(slices, sizeof slices, " -DRT_FUSED_SLICES -DRT_MACRO_SHIFT=%d", RT_MACRO_SHIFT);
     if (!t->walks_ahead && t->list_stride)
         snprintf(walk, sizeof walk, " -DRT_LIST_COPY -DRT_LIST_STRIDE=%zuu", t->list_stride);
@@ -293,7 +293,7 @@ static sluice_status build_program(rt_tracer *t, char *err, size_t err_size)
     /* off CPUs the stream kernels take one ray per work-item (rt_stream.cl) */
     sluice_device_info info;
     int cpu = sluice_context_device(t->ctx, &info) != SLUICE_OK || info.is_cpu;
-    snprintf(opts, sizeof opts, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s%s",
+    snprintf(opts, sizeof t->build_options, "-DRT_UNROLL_STEPS=%u -DRT_UNROLL_TESTS=%u%s%s%s",
              t->opt.unroll_steps, t->opt.unroll_tests,
              t->opt.intersector == RT_ISECT_WATERTIGHT ? " -DRT_WATERTIGHT" : "", walk,
              cpu ? "" : " -DRT_PER_RAY");

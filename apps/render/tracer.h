@@ -189,6 +189,34 @@ const rt_tracer_options *rt_tracer_get_options(const rt_tracer *t);
  *  stream mode. */
 const char *rt_tracer_fused_path(const rt_tracer *t);
 
+/**
+ * Tracing inside another kernel, as the renderers' fused direct light does
+ * (kernels/raytrace/rt_direct.cl: a hit's shadow rays made and traced in
+ * registers, never written to a stream). Such a program takes the tracer's
+ * sources (rt_trace.cl, rt_lanes.cl, rt_fused.cl) with the build options
+ * below, and its kernel calls rt_packet_trace (rt_fused.cl) on packets of
+ * 16 rays. rt_tracer_packets: whether this tracer can serve it (the fused
+ * mode with the Moller-Trumbore test, whose packets rt_packet_trace takes).
+ */
+int rt_tracer_packets(const rt_tracer *t);
+
+/** The build options of the tracer's kernels (its path through this scene's
+ *  grid), to add to those of a program that calls rt_packet_trace. */
+const char *rt_tracer_build_options(const rt_tracer *t);
+
+/** Binds what rt_packet_trace reads to arguments first .. first + 6 of `k`:
+ *  the maxima stream (global uint *), the grid's cell starts and triangle
+ *  lists (global const uint *), the triangle records (global const float *),
+ *  the grid (rt_grid_args by value), the list-order records (global const
+ *  float *) and the macro cells (global const uchar *). */
+sluice_status rt_tracer_bind_packets(rt_tracer *t, sluice_kernel *k, unsigned first);
+
+/** Adds to the statistics what such a kernel traced: rays, voxels visited,
+ *  triangle tests, and the slices crossed and crossed through empty macro
+ *  cells (rt_trace_stats). */
+void rt_tracer_add_traced(rt_tracer *t, uint64_t rays, uint64_t voxels, uint64_t tests,
+                          uint64_t slices, uint64_t slices_skipped);
+
 /** A text listing what the tracer skips (sr_skipped_add), e.g. "empty voxels
  *  (never sent to the intersector)". */
 const char *rt_tracer_skipped(const rt_tracer *t);

@@ -41,6 +41,7 @@ struct rt_tracer {
     sluice_stream *list_records;
     size_t list_stride; /* floats per plane of list_records */
     char fused_path[192];
+    char build_options[384]; /* the trace kernels' build options */
 
     sluice_program *program;
     sluice_kernel *k_setup, *k_traverse, *k_intersect, *k_route_t, *k_route_i, *k_route_setup,

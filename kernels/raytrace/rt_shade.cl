@@ -15,7 +15,9 @@
  * is compiled only when the scene has such materials), RT_HAS_NORMALS,
  * RT_WATERTIGHT (the layout of the triangle records), RT_GATHER (the photon
  * mapper's renderer: diffuse and glossy hits in the whitted mode also emit a
- * gather point, output 2, where the radiance estimate is added).
+ * gather point, output 2, where the radiance estimate is added),
+ * RT_DIRECT_FUSED (the fused mode: area-light samples are left to
+ * rt_direct.cl, which traces them where it makes them).
  * Shade counters: 0 shading calculations, 1 shadow rays, 2 reflection rays,
  * 3 refraction rays, 4 path rays, 5 non-finite contributions dropped.
  */
@@ -145,6 +147,26 @@ RT_NOINLINE void rt_light_block8(uint k0, uint skey, const rt_surface *s, float3
     }
 }
 
+/* Area-light sample k of a hit (surface s, its shadow rays from o,
+ * `reach` what its BRDF can pass; its samples keyed skey) taken alone: the
+ * point q on the light, the light's normal lc (not of unit length) and its
+ * emission le, and whether the sample can add light (rt_light_block8's
+ * rule). */
+inline int rt_light_one(uint k, uint skey, const rt_surface *s, float3 o, float3 reach, uint tri,
+                        const rt_frame *f, global const uint *area_tris,
+                        global const float *area_cdf, global const float *tv,
+                        global const uint *tri_mat, global const rt_material *mats, float3 *q,
+                        float3 *lc, float3 *le)
+{
+    float2 u = rt_sobol2(k, skey);
+    uint lt = rt_area_light_point(u.x, u.y, f->area_lights, area_tris, area_cdf, tv, q, lc);
+    rt_material lm = mats[tri_mat[lt]];
+    *le = (float3)(lm.er, lm.eg, lm.eb);
+    float3 L = *q - o;
+    return lt != tri && dot(s->n, L) > 0.0f && dot(*lc, L) < 0.0f && dot(s->ng, L) > 0.0f &&
+           rt_max3(reach * *le) > 0.0f;
+}
+
 /* Shades rays [base, base + count) of a wave (launched over count). */
 __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt_hit *hits,
                        uint base, global rt_ray *shadow, global rt_ray *secondary,
@@ -198,7 +220,11 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
                                              ray.pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
             SLUICE_COUNT(1, go);
         }
+#ifdef RT_DIRECT_FUSED
+        uint nl = 0u; /* area lights: rt_direct (rt_direct.cl) */
+#else
         uint nl = (lit && f.area_lights) ? f.light_samples : 0u;
+#endif
         float per_sample = f.area_total / (float)f.light_samples;
         float3 reach = w * rt_brdf_support(&s.m);
         float3 o = s.p + off;
@@ -218,18 +244,13 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
         }
         for (uint k = full; k < nl; ++k) {
             /* the same, one sample at a time */
-            float2 u = rt_sobol2(k, skey);
-            float3 q, lc;
-            uint lt =
-                rt_area_light_point(u.x, u.y, f.area_lights, area_tris, area_cdf, tv, &q, &lc);
-            rt_material lm = mats[tri_mat[lt]];
-            float3 le = (float3)(lm.er, lm.eg, lm.eb);
-            float3 L = q - o;
-            int go = lit && lt != h.tri && dot(s.n, L) > 0.0f && dot(lc, L) < 0.0f &&
-                     dot(s.ng, L) > 0.0f && rt_max3(reach * le) > 0.0f;
-            RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, q, 0.99999f,
-                                             rt_area_light_weight(&s, wo, w, L, lc, le, per_sample),
-                                             ray.pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
+            float3 q, lc, le;
+            int go = lit && rt_light_one(k, skey, &s, o, reach, h.tri, &f, area_tris, area_cdf, tv,
+                                         tri_mat, mats, &q, &lc, &le);
+            RT_EMIT_SHADOW(go,
+                           rt_shadow_ray(s.p, off, q, 0.99999f,
+                                         rt_area_light_weight(&s, wo, w, q - o, lc, le, per_sample),
+                                         ray.pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
             SLUICE_COUNT(1, go);
         }
 #ifdef RT_GATHER

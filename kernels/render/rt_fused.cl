@@ -422,26 +422,19 @@ inline int rt_trace_slices(const rt_grid_args *g, rt_packet *P, float16 t0, floa
 }
 #endif /* RT_FUSED_SLICES */
 
-/* Traces rays [first, first + count) (count <= 16) as one packet and writes
- * their hits. Adds the voxels and tests to *steps_sum and *tests_sum, and,
- * slice by slice, the slices crossed and those crossed through empty macro
- * cells to slices[0] and slices[1]. */
-inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, uint first,
-                            uint count, global rt_hit *hits, global uint *maxima,
+/* Takes the rays of packet P (lanes `live`) through the grid: P's hits
+ * (tri, t, u, v) as rt_trace_one finds them, and each lane's voxels visited
+ * and triangle tests in *steps_out and *tests_out; the slices crossed and
+ * those crossed through empty macro cells are added to slices[0] and
+ * slices[1]. Shared by rt_trace_packet (rays from a stream) and the
+ * renderer's fused direct light (rays made in registers, rt_direct.cl). */
+inline void rt_packet_trace(const rt_grid_args *g, rt_packet *P_, int16 live,
                             global const uint *cell_start, global const uint *cell_tris,
                             global const float *tv, global const float *lists,
-                            global const uchar *macro, uint *steps_sum, uint *tests_sum,
+                            global const uchar *macro, uint16 *steps_out, uint16 *tests_out,
                             uint *slices)
 {
-    int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-    int16 live = lane < (int)count;
-    rt_packet P;
-#ifdef RT_AOS16_
-    if (count == 16u)
-        rt_packet_load_run(rays, first, &P);
-    else
-#endif
-        rt_packet_load(rays, (int)first + lane, live, &P);
+    rt_packet P = *P_;
     /* rt_grid_enter, lane by lane the same operations */
     int16 nzx = P.dx != 0.0f, nzy = P.dy != 0.0f, nzz = P.dz != 0.0f;
     float16 t0 = P.tmin, t1 = P.tmax;
@@ -573,6 +566,33 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
         active = adv & inside & (P.tri == -1);
     }
 #endif
+    *P_ = P;
+    *steps_out = steps;
+    *tests_out = tests;
+}
+
+/* Traces rays [first, first + count) (count <= 16) as one packet and writes
+ * their hits. Adds the voxels and tests to *steps_sum and *tests_sum, and,
+ * slice by slice, the slices crossed and those crossed through empty macro
+ * cells to slices[0] and slices[1]. */
+inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, uint first,
+                            uint count, global rt_hit *hits, global uint *maxima,
+                            global const uint *cell_start, global const uint *cell_tris,
+                            global const float *tv, global const float *lists,
+                            global const uchar *macro, uint *steps_sum, uint *tests_sum,
+                            uint *slices)
+{
+    int16 lane = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    int16 live = lane < (int)count;
+    rt_packet P;
+#ifdef RT_AOS16_
+    if (count == 16u)
+        rt_packet_load_run(rays, first, &P);
+    else
+#endif
+        rt_packet_load(rays, (int)first + lane, live, &P);
+    uint16 steps, tests;
+    rt_packet_trace(g, &P, live, cell_start, cell_tris, tv, lists, macro, &steps, &tests, slices);
 #ifdef RT_AOS16_
     if (count == 16u) {
         rt_store_hits16(hits + first, P.tri, P.t, P.u, P.v, steps, tests);
