@@ -629,6 +629,10 @@ inline void rt_trace_packet(const rt_grid_args *g, global const rt_ray *rays, ui
 }
 #endif /* RT_PACKET */
 
+/* The tracer's kernels; a program that only calls rt_packet_trace (the
+ * renderer's, rt_direct.cl) builds with RT_PACKETS_ONLY and leaves them
+ * out. */
+#ifndef RT_PACKETS_ONLY
 __kernel void rt_trace_fused(SLUICE_PARAMS, global const rt_ray *rays, global rt_hit *hits,
                              global uint *maxima, global const uint *cell_start,
                              global const uint *cell_tris, global const float *tv,
@@ -708,3 +712,4 @@ __kernel void rt_macro_cells(SLUICE_PARAMS, global const uint *cell_start, const
     }
 }
 #endif
+#endif /* RT_PACKETS_ONLY */
