@@ -55,19 +55,50 @@ inline float3 rt_area_light_weight(const rt_surface *s, float3 wo, float3 w, flo
 #define RT_NOINLINE
 #endif
 
-/* Light samples k0 .. k0 + 7 of a hit (surface s, seen along wo, weight w;
- * its samples keyed skey): which can add light (gos) and, when `writing`,
- * each one's shadow ray direction, length and weight. Not inlined: in the
- * shading kernel its vectors would weigh on the code of every hit, also of
- * scenes that take one sample (measured). */
-RT_NOINLINE void rt_light_block8(uint k0, uint skey, const rt_surface *s, float3 o, float3 w,
-                                 float3 wo, float3 reach, float per_sample, uint tri, int writing,
+/* What a hit's area-light samples start from (rt_shade, rt_direct.cl):
+ * its shadow rays' origin o (the point, offset by off), the ray's weight w
+ * and its way back wo, what the BRDF can pass (reach), each sample's share
+ * of the lights' area (per_sample), the key of its samples, its triangle
+ * (no light from itself), and how many samples: nl, the first `full` of
+ * them in blocks of RT_LIGHT_LANES. */
+typedef struct rt_light_ctx {
+    float3 off, o, w, wo, reach;
+    float per_sample;
+    uint skey, tri, nl, full;
+} rt_light_ctx;
+
+inline rt_light_ctx rt_light_ctx_at(const rt_surface *s, const rt_ray *ray, uint tri,
+                                    const rt_frame *f, uint nl)
+{
+    rt_light_ctx c;
+    c.off = s->ng * f->scene_eps;
+    c.o = s->p + c.off;
+    c.w = (float3)(ray->wr, ray->wg, ray->wb);
+    c.wo = -(float3)(ray->dx, ray->dy, ray->dz);
+    c.reach = c.w * rt_brdf_support(&s->m);
+    c.per_sample = f->area_total / (float)f->light_samples;
+    c.skey = rt_key(ray->key, 16u);
+    c.tri = tri;
+    c.nl = nl;
+    c.full = nl / RT_LIGHT_LANES * RT_LIGHT_LANES;
+    return c;
+}
+
+/* Light samples k0 .. k0 + 7 of a hit (surface s, samples from c): which
+ * can add light (gos) and, when `writing`, each one's shadow ray direction,
+ * length and weight. Not inlined: in the shading kernel its vectors would
+ * weigh on the code of every hit, also of scenes that take one sample
+ * (measured). */
+RT_NOINLINE void rt_light_block8(uint k0, const rt_light_ctx *c, const rt_surface *s, int writing,
                                  const rt_frame *f, global const uint *area_tris,
                                  global const float *area_cdf, global const float *tv,
                                  global const uint *tri_mat, global const rt_material *mats,
                                  int *gos, float dir[3][RT_LIGHT_LANES], float *tmax,
                                  float wl[3][RT_LIGHT_LANES])
 {
+    uint skey = c->skey, tri = c->tri;
+    float3 o = c->o, w = c->w, wo = c->wo, reach = c->reach;
+    float per_sample = c->per_sample;
     /* pick an emissive triangle by area, then a uniform point on it;
      * the hit's samples stratified over the lights together */
     uint8 k = (uint8)(k0) + (uint8)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u);
@@ -115,9 +146,9 @@ RT_NOINLINE void rt_light_block8(uint k0, uint skey, const rt_surface *s, float3
         float8 d2 = L[0] * L[0] + L[1] * L[1] + L[2] * L[2], dist = sqrt(d2);
         float8 wi[3] = {L[0] / dist, L[1] / dist, L[2] / dist};
         float8 ll = sqrt(lc[0] * lc[0] + lc[1] * lc[1] + lc[2] * lc[2]);
-        float8 c = s->n.x * wi[0] + s->n.y * wi[1] + s->n.z * wi[2];
+        float8 cs = s->n.x * wi[0] + s->n.y * wi[1] + s->n.z * wi[2];
         float8 cl = -((lc[0] / ll) * wi[0] + (lc[1] / ll) * wi[1] + (lc[2] / ll) * wi[2]);
-        float8 scale = c * cl / d2 * per_sample;
+        float8 scale = cs * cl / d2 * per_sample;
         /* the BRDF, the same in every direction but a glossy surface's */
         float3 fb = rt_brdf(&s->m, s->n, s->n, wo);
         float8 fv[3] = {(float8)(fb.x), (float8)(fb.y), (float8)(fb.z)};
@@ -147,24 +178,32 @@ RT_NOINLINE void rt_light_block8(uint k0, uint skey, const rt_surface *s, float3
     }
 }
 
-/* Area-light sample k of a hit (surface s, its shadow rays from o,
- * `reach` what its BRDF can pass; its samples keyed skey) taken alone: the
- * point q on the light, the light's normal lc (not of unit length) and its
- * emission le, and whether the sample can add light (rt_light_block8's
+/* Area-light sample k of a hit (surface s, samples from c) taken alone:
+ * the point q on the light, the light's normal lc (not of unit length) and
+ * its emission le, and whether the sample can add light (rt_light_block8's
  * rule). */
-inline int rt_light_one(uint k, uint skey, const rt_surface *s, float3 o, float3 reach, uint tri,
-                        const rt_frame *f, global const uint *area_tris,
-                        global const float *area_cdf, global const float *tv,
-                        global const uint *tri_mat, global const rt_material *mats, float3 *q,
-                        float3 *lc, float3 *le)
+inline int rt_light_one(uint k, const rt_light_ctx *c, const rt_surface *s, const rt_frame *f,
+                        global const uint *area_tris, global const float *area_cdf,
+                        global const float *tv, global const uint *tri_mat,
+                        global const rt_material *mats, float3 *q, float3 *lc, float3 *le)
 {
-    float2 u = rt_sobol2(k, skey);
+    float2 u = rt_sobol2(k, c->skey);
     uint lt = rt_area_light_point(u.x, u.y, f->area_lights, area_tris, area_cdf, tv, q, lc);
     rt_material lm = mats[tri_mat[lt]];
     *le = (float3)(lm.er, lm.eg, lm.eb);
-    float3 L = *q - o;
-    return lt != tri && dot(s->n, L) > 0.0f && dot(*lc, L) < 0.0f && dot(s->ng, L) > 0.0f &&
-           rt_max3(reach * *le) > 0.0f;
+    float3 L = *q - c->o;
+    return lt != c->tri && dot(s->n, L) > 0.0f && dot(*lc, L) < 0.0f && dot(s->ng, L) > 0.0f &&
+           rt_max3(c->reach * *le) > 0.0f;
+}
+
+/* The shadow ray of that sample (rt_light_one): from c's origin to q,
+ * stopping just short of it, carrying what it adds when unblocked. */
+inline rt_ray rt_light_one_ray(const rt_light_ctx *c, const rt_surface *s, float3 q, float3 lc,
+                               float3 le, uint pixel)
+{
+    return rt_shadow_ray(s->p, c->off, q, 0.99999f,
+                         rt_area_light_weight(s, c->wo, c->w, q - c->o, lc, le, c->per_sample),
+                         pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT);
 }
 
 /* Shades rays [base, base + count) of a wave (launched over count). */
@@ -225,16 +264,12 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
 #else
         uint nl = (lit && f.area_lights) ? f.light_samples : 0u;
 #endif
-        float per_sample = f.area_total / (float)f.light_samples;
-        float3 reach = w * rt_brdf_support(&s.m);
-        float3 o = s.p + off;
-        uint skey = rt_key(ray.key, 16u);
-        uint full = nl / RT_LIGHT_LANES * RT_LIGHT_LANES;
-        for (uint k0 = 0u; k0 < full; k0 += RT_LIGHT_LANES) {
+        rt_light_ctx lx = rt_light_ctx_at(&s, &ray, h.tri, &f, nl);
+        for (uint k0 = 0u; k0 < lx.full; k0 += RT_LIGHT_LANES) {
             int gos[RT_LIGHT_LANES];
             float dir[3][RT_LIGHT_LANES], tmax[RT_LIGHT_LANES], wl[3][RT_LIGHT_LANES];
-            rt_light_block8(k0, skey, &s, o, w, wo, reach, per_sample, h.tri, SLUICE_WRITING, &f,
-                            area_tris, area_cdf, tv, tri_mat, mats, gos, dir, tmax, wl);
+            rt_light_block8(k0, &lx, &s, SLUICE_WRITING, &f, area_tris, area_cdf, tv, tri_mat, mats,
+                            gos, dir, tmax, wl);
             for (uint l = 0u; l < RT_LIGHT_LANES; ++l) {
                 RT_EMIT_SHADOW(gos[l], rt_spawn(s.p, off, (float3)(dir[0][l], dir[1][l], dir[2][l]),
                                                 tmax[l], (float3)(wl[0][l], wl[1][l], wl[2][l]),
@@ -242,15 +277,12 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
                 SLUICE_COUNT(1, gos[l] != 0);
             }
         }
-        for (uint k = full; k < nl; ++k) {
+        for (uint k = lx.full; k < nl; ++k) {
             /* the same, one sample at a time */
             float3 q, lc, le;
-            int go = lit && rt_light_one(k, skey, &s, o, reach, h.tri, &f, area_tris, area_cdf, tv,
-                                         tri_mat, mats, &q, &lc, &le);
-            RT_EMIT_SHADOW(go,
-                           rt_shadow_ray(s.p, off, q, 0.99999f,
-                                         rt_area_light_weight(&s, wo, w, q - o, lc, le, per_sample),
-                                         ray.pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
+            int go = lit && rt_light_one(k, &lx, &s, &f, area_tris, area_cdf, tv, tri_mat, mats, &q,
+                                         &lc, &le);
+            RT_EMIT_SHADOW(go, rt_light_one_ray(&lx, &s, q, lc, le, ray.pixel));
             SLUICE_COUNT(1, go);
         }
 #ifdef RT_GATHER
