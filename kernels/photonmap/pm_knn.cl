@@ -875,12 +875,16 @@ static inline pm_sumi pm_sum_axis(pm_sumf x, float lo, float inv_cell, uint n)
 /* The largest lane (and, of -v, the smallest; no lane is INT_MIN). */
 static inline int pm_sum_hmax(pm_sumi v)
 {
-    int a[PM_SUM_W];
-    PM_SUM_VSTORE(v, 0, a);
-    int m = a[0];
-    for (int l = 1; l < PM_SUM_W; ++l)
-        m = max(m, a[l]);
-    return m;
+    /* halves folded in vectors (a store and a scalar loop cost more, per
+     * row, in pm_row_span) */
+#if PM_KNN_SUM_QUERIES == 16
+    int8 a8 = max(v.lo, v.hi);
+#else
+    int8 a8 = v;
+#endif
+    int4 a4 = max(a8.lo, a8.hi);
+    int2 a2 = max(a4.lo, a4.hi);
+    return max(a2.x, a2.y);
 }
 
 /* pm_gap2 of cell j for the points x of the lanes. */
