@@ -29,7 +29,7 @@ struct rt_renderer {
     sluice_program *program; /* camera.cl and rt_shade.cl, built for the mode and scene */
     sluice_kernel *k_raygen, *k_shade, *k_resolve;
     sluice_counters *counters;
-    /* the fused mode's direct light from area lights (rt_direct.cl): each
+    /* the fused mode's direct light (rt_direct.cl): each
      * hit's shadow rays traced where they are made, not as a stream */
     int direct;
     sluice_kernel *k_direct;
@@ -106,8 +106,7 @@ static sluice_status build_program(rt_renderer *r, const sr_scene_stats *ss)
                    "area-light sampling (none)");
     sr_skipped_add(k, n, mode == RT_MODE_CAST, "shadow pass (cast mode)");
     sr_skipped_add(k, n, !ss->has_normals, "normal interpolation (no vertex normals)");
-    sr_skipped_add(k, n, r->direct,
-                   "area-light shadow-ray streams (fused: traced where they are made)");
+    sr_skipped_add(k, n, r->direct, "shadow-ray streams (fused: traced where they are made)");
     /* the fused direct light also takes the tracer's packet code */
     static const char *const names[] = {
         "rt_types.h", "triangle.cl", "rng.cl",      "film.cl",     "surface.cl",  "lights.cl",
@@ -159,10 +158,11 @@ sluice_status rt_renderer_create(rt_tracer *t, const rt_render_options *opt, rt_
     int specular_kinds = (ss->kinds_present &
                           (SR_KIND_BIT(SR_MATERIAL_MIRROR) | SR_KIND_BIT(SR_MATERIAL_GLASS))) != 0;
     int glass = (ss->kinds_present & SR_KIND_BIT(SR_MATERIAL_GLASS)) != 0;
-    r->direct = mode != RT_MODE_CAST && al.count && opt->light_samples && rt_tracer_packets(t);
-    r->per_shadow = mode == RT_MODE_CAST
+    r->direct = mode != RT_MODE_CAST && (ss->point_lights || (al.count && opt->light_samples)) &&
+                rt_tracer_packets(t);
+    r->per_shadow = mode == RT_MODE_CAST || r->direct
                         ? 0
-                        : ss->point_lights + (al.count && !r->direct ? opt->light_samples : 0);
+                        : ss->point_lights + (al.count ? opt->light_samples : 0);
     r->per_secondary =
         mode == RT_MODE_PATH ? 1 : (mode == RT_MODE_WHITTED && specular_kinds ? 1 : 0);
     if (glass && mode == RT_MODE_WHITTED)
@@ -235,6 +235,23 @@ static sluice_status ensure(sluice_stream *s, size_t n)
     return sluice_stream_capacity(s) >= n ? SLUICE_OK : sluice_stream_grow(s, n);
 }
 
+/* Binds what rt_shade and rt_direct read of the scene, from argument
+ * `first` on: the film's accumulator, the triangles, their indices,
+ * normals and materials, the lights, and the frame. */
+static sluice_status bind_scene(rt_renderer *r, sluice_kernel *k, unsigned first)
+{
+    const sr_device_scene *ds = rt_tracer_scene(r->t);
+    sluice_stream *bufs[] = {
+        sr_film_accum(r->film), ds->tri_records,  ds->indices,   ds->normals, ds->tri_mat,
+        ds->materials,          ds->point_lights, ds->area_tris, ds->area_cdf};
+    sluice_status st = SLUICE_OK;
+    for (unsigned i = 0; i < 9 && st == SLUICE_OK; ++i)
+        st = sluice_kernel_set_stream(k, first + i, bufs[i], 0);
+    if (st == SLUICE_OK)
+        st = sluice_kernel_set_arg(k, first + 9, sizeof r->frame, &r->frame);
+    return st;
+}
+
 /* The fused mode's direct light for rays [base, base + count) of the wave
  * (rt_direct.cl): the same arguments as rt_shade's but the outputs, then
  * the tracer's. */
@@ -242,21 +259,15 @@ static sluice_status direct_slice(rt_renderer *r, size_t base, size_t count)
 {
     sluice_kernel *k = r->k_direct;
     uint32_t b = (uint32_t)base;
-    const sr_device_scene *ds = rt_tracer_scene(r->t);
-    sluice_stream *bufs[] = {
-        sr_film_accum(r->film), ds->tri_records, ds->indices, ds->normals, ds->tri_mat,
-        ds->materials,          ds->area_tris,   ds->area_cdf};
     sluice_status st = sluice_kernel_set_stream(k, 0, r->rays, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 1, r->hits, 0);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_arg(k, 2, sizeof b, &b);
-    for (unsigned i = 0; i < 8 && st == SLUICE_OK; ++i)
-        st = sluice_kernel_set_stream(k, 3 + i, bufs[i], 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_arg(k, 11, sizeof r->frame, &r->frame);
+        st = bind_scene(r, k, 3);
     if (st == SLUICE_OK)
-        st = rt_tracer_bind_packets(r->t, k, 12);
+        st = rt_tracer_bind_packets(r->t, k, 13);
     if (st == SLUICE_OK)
         st = sluice_kernel_launch_count(k, count);
     uint32_t c[DC_COUNT];
@@ -289,14 +300,8 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
         st = sluice_kernel_set_output(k, 3, 0, r->shadow, SLUICE_UNORDERED);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_output(k, 4, 1, r->next, SLUICE_UNORDERED);
-    const sr_device_scene *ds = rt_tracer_scene(t);
-    sluice_stream *bufs[] = {
-        sr_film_accum(r->film), ds->tri_records,  ds->indices,   ds->normals, ds->tri_mat,
-        ds->materials,          ds->point_lights, ds->area_tris, ds->area_cdf};
-    for (unsigned i = 0; i < 9 && st == SLUICE_OK; ++i)
-        st = sluice_kernel_set_stream(k, 5 + i, bufs[i], 0);
     if (st == SLUICE_OK)
-        st = sluice_kernel_set_arg(k, 14, sizeof r->frame, &r->frame);
+        st = bind_scene(r, k, 5);
     if (st == SLUICE_OK && r->opt.gather)
         st = ensure(r->gather, count);
     if (st == SLUICE_OK)

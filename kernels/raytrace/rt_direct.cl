@@ -1,20 +1,21 @@
 /*
- * rt_direct.cl: the fused mode's direct light from area lights. In the
- * stream form (rt_shade.cl) a hit's light samples leave as shadow rays, a
+ * rt_direct.cl: the fused mode's direct light, from point lights and area
+ * lights. In the stream form (rt_shade.cl) a hit's shadow rays leave as a
  * stream that is written, traced (the tracer's own pass) and read back by
  * rt_shadow_resolve, and the shading kernel, which emits them, runs its
- * sampling twice (count pass, write pass). Here, in the fused mode (the MIMD
- * form of Purcell 5.2.2, one kernel taking a ray all the way), a hit's
- * samples are made and traced where they are: the same rays (rt_light_block8
- * and rt_shadow_ray, sample for sample), 16 at a time as one packet through
- * the tracer's rt_packet_trace (rt_fused.cl; a packet takes the rays of the
- * work-item's hits in turn, as the stream's packets do, so that scenes with
- * few samples a hit fill it too), each one that reaches its light adding
- * what it carries. A pixel's sum is taken in fixed point, as
- * rt_shadow_resolve takes it, so the image is the stream form's bit for bit.
+ * light sampling twice (count pass, write pass). Here, in the fused mode
+ * (the MIMD form of Purcell 5.2.2, one kernel taking a ray all the way), a
+ * hit's shadow rays are made and traced where they are: the same rays
+ * (rt_point_light_ray, rt_light_block8 and rt_light_one_ray, ray for ray),
+ * 16 at a time as one packet through the tracer's rt_packet_trace
+ * (rt_fused.cl; a packet takes the rays of the work-item's hits in turn, as
+ * the stream's packets do, so that scenes with few rays a hit fill it too),
+ * each one that reaches its light adding what it carries. A pixel's sum is
+ * taken in fixed point, as rt_shadow_resolve takes it, so the image is the
+ * stream form's bit for bit.
  *
  * Build options: those of rt_shade.cl with RT_DIRECT_FUSED (which leaves
- * area lights to this kernel), and the tracer's (rt_tracer_build_options).
+ * direct light to this kernel), and the tracer's (rt_tracer_build_options).
  * Counters: 0 shadow rays, 1 non-finite contributions dropped, 2 voxels
  * visited, 3 triangle tests, 4 slices crossed, 5 of those through empty
  * macro cells (rt_fused.cl).
@@ -129,18 +130,19 @@ inline void rt_direct_add(rt_direct_batch *B, const rt_direct_grid *G, global lo
         rt_direct_flush(B, G, accum);
 }
 
-/* The area-light samples of rays [base, base + count) of a wave (launched
- * over count), traced where they are made: rt_shade's, with RT_DIRECT_FUSED,
- * leaves them out. A work-item takes a run of rays (its chunk), so that its
- * packets fill with the rays of one hit after another. */
+/* The direct light of rays [base, base + count) of a wave (launched over
+ * count): point lights, then area-light samples, traced where they are
+ * made; rt_shade, with RT_DIRECT_FUSED, leaves them out. A work-item takes a run of rays (its
+ * chunk), so that its packets fill with the rays of one hit after another. */
 __kernel void rt_direct(SLUICE_PARAMS, global const rt_ray *rays, global const rt_hit *hits,
                         uint base, global long *accum, global const float *stv,
                         global const uint *indices, global const float *normals,
                         global const uint *tri_mat, global const rt_material *mats,
-                        global const uint *area_tris, global const float *area_cdf,
-                        const rt_frame f, global uint *maxima, global const uint *cell_start,
-                        global const uint *cell_tris, global const float *tv, const rt_grid_args g,
-                        global const float *lists, global const uchar *macro)
+                        global const rt_point_light *plights, global const uint *area_tris,
+                        global const float *area_cdf, const rt_frame f, global uint *maxima,
+                        global const uint *cell_start, global const uint *cell_tris,
+                        global const float *tv, const rt_grid_args g, global const float *lists,
+                        global const uchar *macro)
 {
     rt_direct_grid G;
     G.g = g;
@@ -169,9 +171,19 @@ __kernel void rt_direct(SLUICE_PARAMS, global const rt_ray *rays, global const r
             /* rt_shade's rule: which hits take direct light */
             int lit = f.mode == RT_MODE_SHADOW || (!specular && f.mode != RT_MODE_CAST);
             uint nl = (lit && f.area_lights) ? f.light_samples : 0u;
-            if (!nl)
+            uint np = lit ? f.point_lights : 0u;
+            if (!nl && !np)
                 continue;
             rt_light_ctx lx = rt_light_ctx_at(&s, &ray, h.tri, &f, nl);
+            for (uint l = 0u; l < np; ++l) {
+                float3 contrib;
+                if (!rt_point_light_go(&s, lx.off, lx.w, lx.wo, plights[l], &contrib))
+                    continue;
+                ++shadow;
+                rt_ray sr = rt_point_light_ray(&s, lx.off, plights[l], contrib, ray.pixel);
+                rt_direct_add(&B, &G, accum, lx.o, (float3)(sr.dx, sr.dy, sr.dz), sr.tmax, contrib,
+                              ray.pixel);
+            }
             for (uint k0 = 0u; k0 < lx.full; k0 += RT_LIGHT_LANES) {
                 int gos[RT_LIGHT_LANES];
                 float dir[3][RT_LIGHT_LANES], tmax[RT_LIGHT_LANES], wl[3][RT_LIGHT_LANES];

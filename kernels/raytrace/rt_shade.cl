@@ -16,8 +16,9 @@
  * RT_WATERTIGHT (the layout of the triangle records), RT_GATHER (the photon
  * mapper's renderer: diffuse and glossy hits in the whitted mode also emit a
  * gather point, output 2, where the radiance estimate is added),
- * RT_DIRECT_FUSED (the fused mode: area-light samples are left to
- * rt_direct.cl, which traces them where it makes them).
+ * RT_DIRECT_FUSED (the fused mode: direct light, point lights and area-light
+ * samples, is left to rt_direct.cl, which traces its shadow rays where it
+ * makes them).
  * Shade counters: 0 shading calculations, 1 shadow rays, 2 reflection rays,
  * 3 refraction rays, 4 path rays, 5 non-finite contributions dropped.
  */
@@ -206,6 +207,30 @@ inline rt_ray rt_light_one_ray(const rt_light_ctx *c, const rt_surface *s, float
                          pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT);
 }
 
+/* Point light pl for a hit (surface s, its shadow rays offset by off, seen
+ * along wo, weight w): what it adds when unblocked (*contrib), and whether
+ * it can add anything. */
+inline int rt_point_light_go(const rt_surface *s, float3 off, float3 w, float3 wo,
+                             rt_point_light pl, float3 *contrib)
+{
+    float3 L = (float3)(pl.px, pl.py, pl.pz) - (s->p + off);
+    float d2 = dot(L, L), dist = sqrt(d2);
+    float3 wi = L / dist;
+    float c = dot(s->n, wi);
+    *contrib = w * rt_brdf(&s->m, s->n, wi, wo) * (float3)(pl.ir, pl.ig, pl.ib) * (c / d2);
+    return c > 0.0f && dot(s->ng, wi) > 0.0f && rt_max3(*contrib) > 0.0f;
+}
+
+/* Its shadow ray: all the way to the light, which has no surface to stop
+ * short of (an occluder just in front of it, a wall it sits outside of,
+ * must still block). */
+inline rt_ray rt_point_light_ray(const rt_surface *s, float3 off, rt_point_light pl, float3 contrib,
+                                 uint pixel)
+{
+    return rt_shadow_ray(s->p, off, (float3)(pl.px, pl.py, pl.pz), 1.0f, contrib, pixel,
+                         RT_KIND_SHADOW | RT_FLAG_ANY_HIT);
+}
+
 /* Shades rays [base, base + count) of a wave (launched over count). */
 __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt_hit *hits,
                        uint base, global rt_ray *shadow, global rt_ray *secondary,
@@ -243,24 +268,19 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
          * area light, each carrying what it adds when unblocked. Mirrors and
          * glass get no direct light where their reflections are traced. */
         int lit = f.mode == RT_MODE_SHADOW || (!specular && f.mode != RT_MODE_CAST);
+#ifdef RT_DIRECT_FUSED
+        (void)plights; /* rt_direct (rt_direct.cl) takes every light */
+#else
         for (uint l = 0u; l < (lit ? f.point_lights : 0u); ++l) {
-            rt_point_light pl = plights[l];
-            /* all the way: a point light has no surface to stop short of,
-             * and an occluder just in front of it (a wall it sits outside
-             * of) must still block */
-            float3 L = (float3)(pl.px, pl.py, pl.pz) - (s.p + off);
-            float d2 = dot(L, L), dist = sqrt(d2);
-            float3 wi = L / dist;
-            float c = dot(s.n, wi);
-            float3 contrib =
-                w * rt_brdf(&s.m, s.n, wi, wo) * (float3)(pl.ir, pl.ig, pl.ib) * (c / d2);
-            int go = lit && c > 0.0f && dot(s.ng, wi) > 0.0f && rt_max3(contrib) > 0.0f;
-            RT_EMIT_SHADOW(go, rt_shadow_ray(s.p, off, (float3)(pl.px, pl.py, pl.pz), 1.0f, contrib,
-                                             ray.pixel, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
+            float3 contrib;
+            int go = rt_point_light_go(&s, off, w, wo, plights[l], &contrib); /* lit here */
+            RT_EMIT_SHADOW(go, rt_point_light_ray(&s, off, plights[l], contrib, ray.pixel));
             SLUICE_COUNT(1, go);
         }
+#endif
 #ifdef RT_DIRECT_FUSED
         uint nl = 0u; /* area lights: rt_direct (rt_direct.cl) */
+        (void)lit;
 #else
         uint nl = (lit && f.area_lights) ? f.light_samples : 0u;
 #endif
