@@ -14,7 +14,10 @@
  * row, instead of shell after shell: all three change the number of passes,
  * never the photons of the estimate (the sweeps can change the order of the
  * power sums: the last bits). Queries are taken in the order of their cells (sorted per call), so
- * that consecutive ones read the same photons from cache.
+ * that consecutive ones read the same photons from cache. With every shell in one pass
+ * (PM_KNN_ALL_SHELLS, at-least mode) the queries of one cell search side by side up to their k-th
+ * photons, whose radius is then fixed, and every photon within it is summed 16 queries at a time:
+ * each photon is read once for the queries beside it, and the estimates are the same.
  *
  * Modes:
  *   PM_KNN_ATLEAST  Purcell's rule. A photon beyond the maximum radius is
