@@ -836,10 +836,13 @@ static void test_determinism(void)
         s = load(lit[i]);
         if (!s)
             continue;
-        for (unsigned mode = RT_MODE_SHADOW; mode <= RT_MODE_WHITTED; ++mode) {
+        /* whitted on each; shadow mode, which lights mirrors and glass too,
+         * on glassball */
+        for (unsigned mode = i == 1 ? RT_MODE_SHADOW : RT_MODE_WHITTED; mode <= RT_MODE_WHITTED;
+             ++mode) {
             /* 12 samples: a block of 8 side by side and 4 one at a time */
-            sr_image *st = render_samples(s, RT_EXEC_STREAM, mode, 40, 32, 2, 5, 12);
-            sr_image *fu = render_samples(s, RT_EXEC_FUSED, mode, 40, 32, 2, 5, 12);
+            sr_image *st = render_samples(s, RT_EXEC_STREAM, mode, 32, 24, 1, 5, 12);
+            sr_image *fu = render_samples(s, RT_EXEC_FUSED, mode, 32, 24, 1, 5, 12);
             CHECK(st && fu && images_identical(st, fu), "%s %s: stream and fused images differ",
                   lit[i], mode_names[mode]);
             sr_image_destroy(st);
