@@ -964,9 +964,10 @@ __attribute__((always_inline)) static inline void pm_sum_add(global const float 
                                                              pm_sumi take, pm_lanes *L)
 {
     L->cnt -= take; /* a true lane is -1 */
-    L->sr += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_R * stride]), take);
-    L->sg += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_G * stride]), take);
-    L->sb += select((pm_sumf)(0.0f), (pm_sumf)(m[PM_MAP_B * stride]), take);
+    /* a masked add (one instruction with AVX-512), not an add of a select */
+    L->sr = select(L->sr, L->sr + m[PM_MAP_R * stride], take);
+    L->sg = select(L->sg, L->sg + m[PM_MAP_G * stride], take);
+    L->sb = select(L->sb, L->sb + m[PM_MAP_B * stride], take);
 }
 
 /* Lists photon `id` as photon number cnt of each lane of `take` (lane l the
