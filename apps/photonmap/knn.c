@@ -72,7 +72,7 @@ struct pm_knn {
     sluice_program *prog;
     sluice_kernel *k_gather, *k_bounds, *k_sat[3], *k_order, *k_sortq, *k_unsort, *k_init, *k_pass,
         *k_live, *k_hash, *k_sum, *k_reach;
-    int sum_after; /* this call's pass stops at k photons; pm_knn_sum follows */
+    int sum_after; /* this call is one pass: pm_knn_reach, then pm_knn_sum */
     sluice_loop *loop;
     /* scratch kept between calls; streams only grow */
     sluice_stream *live, *next, *heap_d2, *heap_id, *dummy;
@@ -113,7 +113,7 @@ static sluice_status knn_pass(void *user, unsigned pass, unsigned choice)
     pm_knn *knn = user;
     sluice_status st = sluice_stream_clear(knn->next);
     if (st == SLUICE_OK)
-        st = knn->sum_after && pass == 0
+        st = knn->sum_after
                  ? sluice_kernel_launch_count(
                        knn->k_reach, (knn->answered + PM_KNN_SUM_QUERIES - 1) / PM_KNN_SUM_QUERIES)
                  : sluice_kernel_launch(knn->k_pass);
@@ -323,12 +323,6 @@ static void params_make(const sr_point_grid_view *v, const pm_knn_options *o, ui
     p->shells_per_pass = o->shells_per_pass == PM_KNN_ALL_SHELLS
                              ? 0u
                              : (o->shells_per_pass ? o->shells_per_pass : 1u);
-    /* one pass takes every shell: the at-least radius is fixed at the k-th
-     * photon, and pm_knn_sum gathers within it for PM_KNN_SUM_QUERIES at a time (the
-     * same photons; the multipass search keeps Purcell's passes, whose hook
-     * shows the estimates growing) */
-    p->stop_at_k =
-        o->mode == PM_KNN_ATLEAST && p->shells_per_pass == 0u && v->layout == SR_POINT_GRID_DENSE;
 }
 
 /* Reads the results back into the statistics' means and counts. */
@@ -690,7 +684,13 @@ static sluice_status query(pm_knn *knn, const sr_point_grid *grid, sluice_stream
         st = sluice_kernel_set_output(knn->k_live, 2, 0, knn->next, SLUICE_UNORDERED);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(knn->k_init, 0, knn->live, 0);
-    knn->sum_after = p.stop_at_k != 0u;
+    /* one pass takes every shell: pm_knn_reach searches up to the k-th
+     * photon, where the at-least radius is fixed, and pm_knn_sum gathers
+     * within it, PM_KNN_SUM_QUERIES at a time (the same photons; the
+     * multipass search keeps Purcell's passes, whose hook shows the
+     * estimates growing) */
+    knn->sum_after =
+        o->mode == PM_KNN_ATLEAST && p.shells_per_pass == 0u && v.layout == SR_POINT_GRID_DENSE;
     if (knn->sum_after) {
         /* pm_knn_sum and pm_knn_reach take the same arguments, but for the
          * summed counts pm_knn_reach takes after the cell counts */

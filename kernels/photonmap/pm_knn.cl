@@ -617,17 +617,13 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
     const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
     float8 ar = (float8)(0.0f), ag = (float8)(0.0f), ab = (float8)(0.0f);
     for (int z = b0[2]; z <= b1[2]; ++z) {
-        /* with stop_at_k the radius is fixed at the k-th photon: the rest
-         * is pm_knn_sum's */
-        if (p->stop_at_k && st->count >= p->k)
-            break;
         float gz = pm_gap2(st->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2], p->box_lo[2],
                            p->box_hi[2]);
         if (gz > pm_bound(st, p, exact))
             continue;
         uint plane = (uint)n[0] * (uint)n[1] * (uint)z;
         if (b1[1] - b0[1] + 1 < PM_ROWS8_MIN) {
-            for (int y = b0[1]; y <= b1[1] && !(p->stop_at_k && st->count >= p->k); ++y) {
+            for (int y = b0[1]; y <= b1[1]; ++y) {
                 uint row = plane + (uint)n[0] * (uint)y;
                 if (!pm_row_holds(map_start, cell_count, row, b0[0], b1[0]))
                     continue;
@@ -669,7 +665,7 @@ static inline void pm_scan_box(pm_state *st, const int *b0, const int *b1, const
             vstore8(
                 min((int8)b1[0], pm_axis8(st->px + reach, g->lo[0], g->inv_cell[0], g->dims[0])), 0,
                 xbs);
-            while (todo && !(p->stop_at_k && st->count >= p->k)) {
+            while (todo) {
                 int l = popcount((todo & (0u - todo)) - 1u); /* the lowest set bit */
                 todo &= todo - 1u;
                 pm_scan_row(st, plane + (uint)n[0] * (uint)(y0 + l), y0 + l, z, xas[l], xbs[l], p,
@@ -740,7 +736,7 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
                  * are rows of one cell each: the same photons. */
                 int b0[3], b1[3];
                 int ext = pm_reach_cells(qp, reach, qc, n, &g, &p, b0, b1, &covered);
-                if (b0[0] <= b1[0] && b0[1] <= b1[1] && b0[2] <= b1[2] && !p.stop_at_k)
+                if (b0[0] <= b1[0] && b0[1] <= b1[1] && b0[2] <= b1[2])
                     pm_scan_box(&st, b0, b1, n, &g, &p, exact, map, map_start, cell_count, indices,
                                 qc, s - 1);
                 s = max(s, ext);
@@ -1034,7 +1030,7 @@ pm_row_span(const pm_lanes *L, pm_sumf t, pm_sumf bound, pm_sumi on, int lo, int
 }
 
 /* The at-least estimates of queries whose search stopped at k photons
- * (pm_knn_params.stop_at_k), PM_KNN_SUM_QUERIES queries (consecutive in the search order, so
+ * (pm_knn_reach), PM_KNN_SUM_QUERIES queries (consecutive in the search order, so
  * near one another) a work-item. Their radius is fixed: the at-least rule
  * (pm_scan_run) takes every photon before the k-th, each within the radius
  * (the farthest of them), and every photon within the radius after it, and
@@ -1171,7 +1167,7 @@ static inline pm_sumf pm_cube_d2_lanes(const pm_lanes *L, const int *qc, int s, 
  * at a time, in order: a lane still short of k takes every photon that
  * passes (within the maximum radius and, with the normal filter, arriving
  * on its side), its radius growing to take it in (pm_scan_run, before the
- * k-th photon); a lane holding k takes nothing more (stop_at_k). Lanes
+ * k-th photon); a lane holding k takes nothing more (its radius fixed). Lanes
  * short of k list what they take (pm_knn_sum lists anew for the others). */
 __attribute__((always_inline)) static inline void pm_reach_run(pm_lanes *L, pm_sumi on, uint b,
                                                                uint e, const pm_knn_params *p,
@@ -1254,9 +1250,9 @@ static inline void pm_reach_box(pm_lanes *L, pm_sumi on, const int *b0, const in
     }
 }
 
-/* The at-least search up to each query's k-th photon (stop_at_k: the pass
- * of the one-pass search, pm_knn_pass's, for the queries of one cell at a
- * time), PM_KNN_SUM_QUERIES consecutive places of the search order a
+/* The at-least search up to each query's k-th photon (the one-pass
+ * search's first step: pm_knn_pass's search, stopped there, for the queries
+ * of one cell at a time), PM_KNN_SUM_QUERIES consecutive places of the search order a
  * work-item, and those of them in one cell (the order is by cell) in
  * lockstep, one query a lane. Queries of one cell explore the same shells
  * and faces, so each photon is read once for all of them and tested side by

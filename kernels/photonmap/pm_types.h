@@ -69,10 +69,6 @@ typedef struct pm_knn_params {
     rt_u32 map_stride;      /* floats per plane of the cell-ordered map */
     float box_lo[3];        /* the stored photons' bounding box (lo > hi when */
     float box_hi[3];        /* there are none): no photon lies outside it */
-    rt_u32 stop_at_k;       /* non-zero (at-least mode): a search ends once it
-                               holds k photons, its radius fixed, without
-                               sweeping the rest or summing what it took;
-                               pm_knn_sum then takes every photon within it */
 } pm_knn_params;
 
 /** The kNN search's cell-ordered copy of the photon map is a structure of
