@@ -21,9 +21,9 @@
 #                 (-DCOMPACT_BLOCK=4: group order scans once a block), in
 #                 turn, R rounds -> block-{on,off}-N.json (off: 4)
 #   gpu-scan-ab=R  bench_streams on the GPU with group order's scan as
-#                 built (16 work-items' serial segments) and in log2(G)
-#                 rounds of the whole group (-DSLUICE_KS_SCAN), in turn, R
-#                 rounds -> ksscan-{on,off}-N.json (off: the rounds)
+#                 built there (log2(G) rounds of the whole group) and in 16
+#                 work-items' serial segments (-DSLUICE_NO_KS_SCAN), in
+#                 turn, R rounds -> ksscan-{on,off}-N.json (off: segments)
 #   gpu-rt-ab=R   bench_raytrace on the GPU with the stream tracer's kernels
 #                 one ray per work-item (the default there) and in blocks of
 #                 16 rays (-DRT_NO_PER_RAY), in turn, R rounds
@@ -36,6 +36,9 @@
 #                 PoCL's own options;
 #                 gpu-tests=REGEX only the tests REGEX matches (ctest -R)
 #   gpu-raytrace  bench_raytrace on the GPU -> raytrace-h100.json
+#   gpu-rt-test   test_raytrace on the GPU, the groups that render first
+#                 (its reference images cannot be read) -> raytrace-test-gpu.txt
+#   gpu-photonmap bench_photonmap.py on the GPU -> photonmap-h100.json
 #   scaling=LIST  bench/bench_scaling.py on PoCL, threads in LIST's order
 #                 (1 first) -> scaling-xeon16.json, the runs in scaling-runs.tar
 #   overhead=LIST bench_streams on 2^18 records on PoCL at each thread count
@@ -226,9 +229,9 @@ for phase in "$@"; do
             build/bench/bench_streams --skip-bitonic
         ;;
     gpu-scan-ab=*)
-        # group order's scan (sluice_group_place_, kernels/sluice.cl): 16
-        # serial segments against Kogge and Stone's rounds
-        gpu_ab "${phase#gpu-scan-ab=}" -DSLUICE_KS_SCAN ksscan 90 \
+        # group order's scan (sluice_group_place_, kernels/sluice.cl):
+        # Kogge and Stone's rounds against 16 serial segments
+        gpu_ab "${phase#gpu-scan-ab=}" -DSLUICE_NO_KS_SCAN ksscan 90 \
             "^ *(copy|scan|split|compact|partition)" \
             build/bench/bench_streams --skip-bitonic
         ;;
@@ -269,6 +272,23 @@ for phase in "$@"; do
         else
             say "no ctest on this machine"
         fi
+        ;;
+    gpu-rt-test)
+        # the ray tracer's test on the GPU, its groups that render first
+        # (stream against fused bit for bit), then the rest; the reference
+        # images cannot be read there (no image module), so those fail
+        say "test_raytrace on the GPU"
+        (cd build/tests && SLUICE_DEVICE=$DEV limited 150 ./test_raytrace \
+            --only determinism,auto_grid,camera_inside,near_area_light;
+            SLUICE_DEVICE=$DEV limited 150 ./test_raytrace \
+                --only random_rays,one_triangle,watertight,reference_images) \
+            >"$OUT/raytrace-test-gpu.txt" 2>&1
+        grep -E "failed|passed|checked|cannot" "$OUT/raytrace-test-gpu.txt" | head -40
+        ;;
+    gpu-photonmap)
+        say "bench_photonmap on the GPU"
+        limited 200 python3 bench/bench_photonmap.py --device "$DEV" \
+            --out "$OUT/photonmap-h100.json" | tail -30
         ;;
     gpu-raytrace)
         say "bench_raytrace on the GPU"

@@ -243,6 +243,16 @@ SLUICE_INLINE_ uint8 sluice_group_place_(local uint *t, uint8 x, local uint *at)
     return r;
 }
 
+/* Off CPUs (where the runtime defines SLUICE_UNROLL_STATE_) the group's
+ * scan of ordered outputs takes Kogge and Stone's rounds below: on an H100
+ * they made the ordered compaction and split faster (bench/README.md, "The
+ * group's scan in rounds on the GPU"). -DSLUICE_NO_KS_SCAN keeps the serial
+ * segments there; on PoCL the rounds compile far slower (a barrier in a
+ * loop), so CPUs keep the segments unless -DSLUICE_KS_SCAN. */
+#if defined(SLUICE_UNROLL_STATE_) && !defined(SLUICE_NO_KS_SCAN) && !defined(SLUICE_KS_SCAN)
+#define SLUICE_KS_SCAN
+#endif
+
 #ifdef SLUICE_KS_SCAN
 /* sluice_group_place_ for ordered outputs in slots 0 to N - 1 only, N = 2 or
  * 4 (uint2, uint4): the group's scan in log2(G) rounds of all its
@@ -250,8 +260,8 @@ SLUICE_INLINE_ uint8 sluice_group_place_(local uint *t, uint8 x, local uint *at)
  * words of t, instead of 16 work-items' serial segments. A GPU's work-group
  * then waits on 8 short rounds (G = 256) rather than on 32 dependent reads
  * of local memory by a few work-items; the narrower vectors also move a
- * quarter or half of the words. Unmeasured on a GPU: -DSLUICE_KS_SCAN in
- * SLUICE_BUILD_OPTIONS turns it on (bench/lent_machine.sh gpu-scan-ab). */
+ * quarter or half of the words (bench/lent_machine.sh gpu-scan-ab measures
+ * it against the segments). */
 #define SLUICE_KS_PLACE_(N)                                                                        \
     SLUICE_INLINE_ uint##N sluice_group_place##N##_(local uint *t, uint##N x, local uint *at)      \
     {                                                                                              \
