@@ -7,22 +7,26 @@
 #ifndef SR_RNG_CL
 #define SR_RNG_CL
 
-/* A 32-bit integer hash with good avalanche (the "lowbias32" constants). */
-inline uint rt_hash(uint x)
-{
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
-
-/* The key of a sub-path: `a` (a parent key or a seed) combined with `b`. */
-inline uint rt_key(uint a, uint b)
-{
-    return rt_hash(a ^ rt_hash(b + 0x9e3779b9u));
-}
+/* A 32-bit integer hash with good avalanche (the "lowbias32" constants),
+ * and the key of a sub-path: `a` (a parent key or a seed) combined with `b`.
+ * Defined for uint and, for eye rays made 16 at a time (camera.cl), uint16:
+ * the same operations lane by lane. */
+#define RT_HASH_(T, hash, key)                                                                     \
+    inline T hash(T x)                                                                             \
+    {                                                                                              \
+        x ^= x >> 16;                                                                              \
+        x *= 0x7feb352du;                                                                          \
+        x ^= x >> 15;                                                                              \
+        x *= 0x846ca68bu;                                                                          \
+        x ^= x >> 16;                                                                              \
+        return x;                                                                                  \
+    }                                                                                              \
+    inline T key(T a, T b)                                                                         \
+    {                                                                                              \
+        return hash(a ^ hash(b + 0x9e3779b9u));                                                    \
+    }
+RT_HASH_(uint, rt_hash, rt_key)
+RT_HASH_(uint16, rt_hash16, rt_key16)
 
 /* A uniform number in [0, 1) for dimension `dim` of the path keyed `key`. */
 inline float rt_rand(uint key, uint dim)
@@ -30,23 +34,7 @@ inline float rt_rand(uint key, uint dim)
     return (float)(rt_key(key, dim) >> 8) * (1.0f / 16777216.0f);
 }
 
-/* rt_hash, rt_key and rt_rand on 16 lanes: the same operations lane by lane
- * (eye rays made 16 at a time, camera.cl). */
-inline uint16 rt_hash16(uint16 x)
-{
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
-
-inline uint16 rt_key16(uint16 a, uint16 b)
-{
-    return rt_hash16(a ^ rt_hash16(b + 0x9e3779b9u));
-}
-
+/* rt_rand on 16 lanes. */
 inline float16 rt_rand16(uint16 key, uint dim)
 {
     return convert_float16(rt_key16(key, (uint16)(dim)) >> 8) * (1.0f / 16777216.0f);
