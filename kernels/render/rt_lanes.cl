@@ -376,9 +376,19 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
           pvz_ = RT_FMS_(dx, e2y, dy, e2x);                                                        \
         F det_ = RT_DOT_(e1x, pvx_, e1y, pvy_, e1z, pvz_);                                         \
         I m_ = (mask) & (det_ != 0.0f);                                                            \
-        F inv_ = 1.0f / det_;                                                                      \
         F sx_ = (ox) - (v0x), sy_ = (oy) - (v0y), sz_ = (oz) - (v0z);                              \
-        F u_ = RT_DOT_(sx_, pvx_, sy_, pvy_, sz_, pvz_) * inv_;                                    \
+        F un_ = RT_DOT_(sx_, pvx_, sy_, pvy_, sz_, pvz_);                                          \
+        if (quit) {                                                                                \
+            /* before the division: lanes whose u = un / det is surely out                         \
+             * of [0, 1] (un against det's sign below -2^-100 |det| or above                       \
+             * (1 + 2^-20) |det|: the rounded u below is then out too), so                         \
+             * that a triangle no lane can hit costs no division */                                \
+            F ad_ = fabs(det_), su_ = select(un_, -un_, det_ < 0.0f);                              \
+            if (!any(m_ & ~((su_ < ad_ * -0x1p-100f) | (su_ > ad_ * (1.0f + 0x1p-20f)))))          \
+                break;                                                                             \
+        }                                                                                          \
+        F inv_ = 1.0f / det_;                                                                      \
+        F u_ = un_ * inv_;                                                                         \
         m_ &= ~((u_ < 0.0f) | (u_ > 1.0f));                                                        \
         if ((quit) && !any(m_))                                                                    \
             break;                                                                                 \
