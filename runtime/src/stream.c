@@ -220,6 +220,11 @@ sluice_status sluice_stream_set_length(sluice_stream *s, size_t length)
         return sl_fail(s->ctx, SLUICE_ERROR_OVERFLOW,
                        "length %zu exceeds the stream's capacity of %zu records", length,
                        s->capacity);
+    /* A length known on the host is the device's too (every command that
+     * may change it marks it unknown when queued): a launch that maps an
+     * output of the length it had queues no command for it. */
+    if (s->len_known && s->len == length)
+        return SLUICE_OK;
     sluice_status st = sl_vars_fill(s->ctx, s->var, 1, (cl_uint)length);
     if (st == SLUICE_OK) {
         s->len = length;
