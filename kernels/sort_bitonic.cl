@@ -68,15 +68,16 @@ __kernel void bitonic_local(global uint *keys, global uint *vals, uint has_vals,
             uint i, p;
             bitonic_pair(lid, k, j, &i, &p);
             if (base + p < n) {
+                /* without a branch, so that a CPU's work-group loop is
+                 * vectorised: the same swaps */
                 uint a = lk[i], b = lk[p];
-                if (b < a) {
-                    lk[i] = b;
-                    lk[p] = a;
-                    if (has_vals) {
-                        uint v = lv[i];
-                        lv[i] = lv[p];
-                        lv[p] = v;
-                    }
+                uint sw = b < a;
+                lk[i] = sw ? b : a;
+                lk[p] = sw ? a : b;
+                if (has_vals) {
+                    uint va = lv[i], vb = lv[p];
+                    lv[i] = sw ? vb : va;
+                    lv[p] = sw ? va : vb;
                 }
             }
             barrier(CLK_LOCAL_MEM_FENCE);
