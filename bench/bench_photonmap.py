@@ -65,7 +65,7 @@ def run(exe, scene, s, build, quick, tmp, extra=(), device=None):
     size = "128x96" if quick else s["size"]
     cmd = [exe, "--scene", scene, "--size", size, "--photons", str(s["photons"]),
            "--k", str(s["k"]), "--grid", s["grid"], "--light-samples", str(s["light_samples"]),
-           "--map", build, "--out", os.path.join(tmp, "img.png"), "--stats", stats, "--quiet",
+           "--map", build, "--no-image", "--stats", stats, "--quiet",
            "--no-profile"] + list(extra) + (["--device", device] if device else [])
     subprocess.run(cmd, check=True)
     with open(stats) as f:

@@ -38,7 +38,8 @@
 #   gpu-raytrace  bench_raytrace on the GPU -> raytrace-h100.json
 #   gpu-rt-test   test_raytrace on the GPU, the groups that render first
 #                 (its reference images cannot be read) -> raytrace-test-gpu.txt
-#   gpu-photonmap bench_photonmap.py on the GPU -> photonmap-h100.json
+#   gpu-photonmap bench_photonmap.py on the GPU (its renders write no image,
+#                 so the image module is not needed) -> photonmap-h100.json
 #   scaling=LIST  bench/bench_scaling.py on PoCL, threads in LIST's order
 #                 (1 first) -> scaling-xeon16.json, the runs in scaling-runs.tar
 #   overhead=LIST bench_streams on 2^18 records on PoCL at each thread count

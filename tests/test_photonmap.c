@@ -13,6 +13,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <sys/wait.h>
 
 static sluice_context *ctx;
@@ -441,6 +442,25 @@ static void test_cli(const char *exe)
     int rc = check_run(cmd, out, sizeof out);
     CHECK(rc != 0 && strstr(out, "no-such-dir/p-0000.png"), "--pass-images into nowhere: %d %s", rc,
           out);
+    /* --no-image: renders and reports without the image module, writes no
+     * image; refused beside an option that writes one */
+    remove("out.png");
+    remove("pm_noimg.json");
+    snprintf(cmd, sizeof cmd,
+             "SLUICE_IMAGE_MODULE=no-such-dir/m.so %s --scene glassball --size 32x24 --photons 500 "
+             "--no-image --stats pm_noimg.json --quiet",
+             exe);
+    rc = check_run(cmd, out, sizeof out);
+    f = fopen("pm_noimg.json", "r");
+    n = f ? fread(out + strlen(out), 1, sizeof out - 1 - strlen(out), f) : 0;
+    if (f)
+        fclose(f);
+    CHECK(rc == 0 && n > 0 && strstr(out, "\"radiance_estimate\"") && access("out.png", F_OK) != 0,
+          "--no-image: exit %d: %s", rc, out);
+    snprintf(cmd, sizeof cmd, "%s --no-image --pass-images pm_pass.png", exe);
+    rc = check_run(cmd, out, sizeof out);
+    CHECK(rc == 2 && strstr(out, "--no-image") && strstr(out, "--pass-images"),
+          "--no-image --pass-images: exit %d: %s", rc, out);
 }
 
 /* The total power of glassball's caustic photons (stored after glass only),

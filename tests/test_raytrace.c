@@ -949,6 +949,24 @@ static void test_cli(const char *exe)
               !strstr(out, "rays:"),
           "no image module: exit %d: %s", nomod, out);
     CHECK(access("cli_nomod.png", F_OK) != 0, "no image module: an image was written");
+    /* --no-image renders and reports without it, and writes no image */
+    remove("out.png");
+    snprintf(cmd, sizeof cmd,
+             "SLUICE_IMAGE_MODULE=no-such-dir/m.so %s --scene cornell --size 32x24 --no-image "
+             "--exec fused --mode shadow",
+             exe);
+    nomod = check_run(cmd, out, sizeof out);
+    CHECK(nomod == 0 && strstr(out, "rays:") && access("out.png", F_OK) != 0,
+          "--no-image: exit %d: %s", nomod, out);
+    const char *writers[] = {"--out cli_x.png", "--checkpoint 1", "--sample-map cli_m.png"};
+    for (size_t i = 0; i < 3; ++i) {
+        snprintf(cmd, sizeof cmd, "%s --no-image %s", exe, writers[i]);
+        nomod = check_run(cmd, out, sizeof out);
+        char opt[32];
+        snprintf(opt, sizeof opt, "%.*s", (int)strcspn(writers[i], " "), writers[i]);
+        CHECK(nomod == 2 && strstr(out, "--no-image") && strstr(out, opt),
+              "--no-image %s: exit %d: %s", writers[i], nomod, out);
+    }
 
     snprintf(cmd, sizeof cmd,
              "%s --scene cornell --mode shadow --size 32x24 --exec fused --out cli_ok.exr "

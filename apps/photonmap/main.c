@@ -211,6 +211,8 @@ static int parse(int argc, char **argv, cli *c)
             return sr_cli_bad(PROG, "--photon-grid", "hash",
                               "cannot take --map stencil (its power redistribution is per cell)");
     }
+    if (c->common.no_image && c->pass_images)
+        return sr_cli_bad(PROG, "--no-image", NULL, "writes no image: leave out --pass-images");
     return sr_cli_common_finish(PROG, &c->common);
 }
 
@@ -234,7 +236,8 @@ static sluice_status write_image(run *u, size_t *bad)
     char err[512] = "";
     sluice_status st = rt_renderer_write(pm_renderer_whitted(u->r), u->out, bad, err, sizeof err);
     if (st != SLUICE_OK)
-        fprintf(stderr, PROG ": writing %s: %s\n", u->out, err[0] ? err : sluice_status_string(st));
+        fprintf(stderr, PROG ": writing %s: %s\n", u->out ? u->out : "the image",
+                err[0] ? err : sluice_status_string(st));
     return st;
 }
 
@@ -472,7 +475,7 @@ int main(int argc, char **argv)
     run u;
     memset(&u, 0, sizeof u);
     u.r = r;
-    u.out = cc->out;
+    u.out = cc->no_image ? NULL : cc->out;
     sr_progressive prog = {"samples",    spp,    cc->time_limit,   cc->checkpoint,
                            cc->progress, stderr, cc->target_error, estimate};
     sr_progressive_result pr;
@@ -490,7 +493,8 @@ int main(int argc, char **argv)
         goto done;
     }
     if (bad)
-        fprintf(stderr, PROG ": warning: %zu non-finite pixels written as black\n", bad);
+        fprintf(stderr, PROG ": warning: %zu non-finite pixels %s\n", bad,
+                cc->no_image ? "(no image written)" : "written as black");
     if (!cc->quiet)
         report(stderr, 0, &c, o, r, setup, total, pr.done, ctx);
     if (cc->stats) {
@@ -507,7 +511,7 @@ int main(int argc, char **argv)
     }
     if (pr.interrupted)
         fprintf(stderr, PROG ": interrupted after %u of %u samples; wrote %s\n", pr.done, spp,
-                cc->out);
+                cc->no_image ? "no image (--no-image)" : cc->out);
     exit_code = pr.interrupted ? 130 : 0;
 done:
     pm_renderer_destroy(r);

@@ -171,7 +171,8 @@ static sluice_status write_image(run *r, size_t *bad_pixels)
     char err[512] = "";
     sluice_status st = rt_renderer_write(r->rend, r->out, bad_pixels, err, sizeof err);
     if (st != SLUICE_OK)
-        fprintf(stderr, PROG ": writing %s: %s\n", r->out, err[0] ? err : sluice_status_string(st));
+        fprintf(stderr, PROG ": writing %s: %s\n", r->out ? r->out : "the image",
+                err[0] ? err : sluice_status_string(st));
     return st;
 }
 
@@ -261,7 +262,7 @@ int main(int argc, char **argv)
         goto done;
     if (cc->profile)
         sluice_profile_reset(ctx);
-    run r = {rend, cc->out, ctx};
+    run r = {rend, cc->no_image ? NULL : cc->out, ctx};
     sr_progressive prog = {"samples",    spp,    cc->time_limit,   cc->checkpoint,
                            cc->progress, stderr, cc->target_error, estimate};
     sr_progressive_result pr;
@@ -278,7 +279,8 @@ int main(int argc, char **argv)
         goto done;
     }
     if (bad_pixels)
-        fprintf(stderr, PROG ": warning: %zu non-finite pixels written as black\n", bad_pixels);
+        fprintf(stderr, PROG ": warning: %zu non-finite pixels %s\n", bad_pixels,
+                cc->no_image ? "(no image written)" : "written as black");
 
     char skipped[768];
     snprintf(skipped, sizeof skipped, "%s", rt_renderer_skipped(rend));
@@ -314,10 +316,10 @@ int main(int argc, char **argv)
     }
     if (pr.interrupted)
         fprintf(stderr, PROG ": interrupted after %u of %u samples; wrote %s\n", pr.done, spp,
-                cc->out);
+                cc->no_image ? "no image (--no-image)" : cc->out);
     else if (pr.out_of_time)
         fprintf(stderr, PROG ": time limit: %u samples in %.1f s; wrote %s\n", pr.done, pr.seconds,
-                cc->out);
+                cc->no_image ? "no image (--no-image)" : cc->out);
     exit_code = pr.interrupted ? 130 : 0;
 done:
     rt_renderer_destroy(rend);

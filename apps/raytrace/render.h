@@ -74,8 +74,8 @@ int rt_renderer_done(const rt_renderer *r);
  *  be) in `*bad_pixels` (may be NULL) and writes 0 there instead. */
 sluice_status rt_renderer_image(rt_renderer *r, sr_image *img, size_t *bad_pixels);
 
-/** rt_renderer_image written to `path` (.png, .exr, .hdr); `err` says why
- *  it failed. */
+/** rt_renderer_image written to `path` (.png, .exr, .hdr; NULL: only its
+ *  non-finite pixels counted); `err` says why it failed. */
 sluice_status rt_renderer_write(rt_renderer *r, const char *path, size_t *bad_pixels, char *err,
                                 size_t err_size);
 

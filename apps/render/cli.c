@@ -96,7 +96,8 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
         const char *name;
         size_t field;
     } flags[] = {{"--progress", offsetof(sr_cli_common, progress)},
-                 {"--quiet", offsetof(sr_cli_common, quiet)}};
+                 {"--quiet", offsetof(sr_cli_common, quiet)},
+                 {"--no-image", offsetof(sr_cli_common, no_image)}};
     for (size_t k = 0; k < sizeof flags / sizeof *flags; ++k)
         if (!strcmp(a, flags[k].name)) {
             *(int *)((char *)c + flags[k].field) = 1;
@@ -126,6 +127,7 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
         break;
     case 1:
         c->out = v;
+        c->out_given = 1;
         break;
     case 2:
         c->stats = v;
@@ -175,6 +177,15 @@ int sr_cli_image_path(const char *prog, const char *opt, const char *path)
 
 int sr_cli_common_finish(const char *prog, const sr_cli_common *c)
 {
+    if (c->no_image) {
+        const char *writes = c->out_given    ? "--out"
+                             : c->checkpoint ? "--checkpoint"
+                             : c->sample_map ? "--sample-map"
+                                             : NULL;
+        char why[64];
+        snprintf(why, sizeof why, "writes no image: leave out %s", writes ? writes : "");
+        return writes ? sr_cli_bad(prog, "--no-image", NULL, why) : 0;
+    }
     int rc = sr_cli_image_path(prog, "--out", c->out);
     if (!rc && c->sample_map)
         rc = sr_cli_image_path(prog, "--sample-map", c->sample_map);
@@ -190,6 +201,8 @@ void sr_cli_common_usage(FILE *out)
           "  --seed N                 random seed (default 1); same seed, same image\n"
           "  --out FILE               image: .png (sRGB, 8-bit), .exr or .hdr (linear float)\n"
           "                           (default out.png)\n"
+          "  --no-image               render and report (statistics, --stats), write no\n"
+          "                           image: for timing, or where OpenImageIO is missing\n"
           "  --stats FILE             write the statistics as JSON\n"
           "  --progress               progress bar with ETA on stderr\n"
           "  --checkpoint N           write the image every N samples or passes\n"
@@ -261,6 +274,8 @@ int sr_cli_context(const char *prog, const sr_cli_common *c, sluice_context **ou
 int sr_cli_images_ready(const char *prog, const sr_cli_common *c)
 {
     char err[1024] = "";
+    if (c->no_image)
+        return 0; /* nothing to write (sr_cli_common_finish refused what would) */
     if (sr_image_io_load(err, sizeof err) != SLUICE_OK) {
         fprintf(stderr, "%s: --out %s: %s\n", prog, c->out, err);
         return 1;

@@ -31,6 +31,8 @@ typedef struct sr_cli_common {
     int progress;           /**< --progress */
     int profile;            /**< 1 unless --no-profile */
     int quiet;              /**< --quiet */
+    int no_image;           /**< --no-image: render and report, write no image */
+    int out_given;          /**< --out was given */
 } sr_cli_common;
 
 /** Fills the defaults. */
@@ -45,7 +47,8 @@ void sr_cli_common_init(sr_cli_common *c);
 int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_common *c);
 
 /** Checks what can only be checked once all options are read (the output's
- *  extension). 0 when fine, 2 after printing a message. */
+ *  extension; --no-image with an option that writes an image). 0 when fine,
+ *  2 after printing a message. */
 int sr_cli_common_finish(const char *prog, const sr_cli_common *c);
 
 /** Checks that an image path given to option `opt` ends in .png, .exr or
@@ -70,7 +73,7 @@ int sr_cli_context(const char *prog, const sr_cli_common *c, sluice_context **ou
 
 /** Loads the image module (image.h) now: 0, or 1 after printing
  *  "PROG: --out FILE: why", so that a program fails before rendering rather
- *  than lose its image. */
+ *  than lose its image. With --no-image it loads nothing and returns 0. */
 int sr_cli_images_ready(const char *prog, const sr_cli_common *c);
 
 /** Prints the common options' lines of --help. */

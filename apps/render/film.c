@@ -181,7 +181,7 @@ sluice_status sr_film_resolve_tiles(sr_film *f, sr_film *extra, const uint32_t *
 sluice_status sr_film_write(sr_film *f, const uint32_t *tile_samples, const char *path,
                             size_t *bad_pixels, char *err, size_t err_size)
 {
-    if (!f || !path || !tile_samples) {
+    if (!f || !tile_samples) {
         sr_set_error(err, err_size, "sr_film_write: NULL argument");
         return SLUICE_ERROR_INVALID_ARGUMENT;
     }
@@ -195,7 +195,7 @@ sluice_status sr_film_write(sr_film *f, const uint32_t *tile_samples, const char
                          st == SLUICE_ERROR_OUT_OF_MEMORY ? "out of host memory"
                                                           : sluice_context_error(f->ctx));
     }
-    if (st == SLUICE_OK)
+    if (st == SLUICE_OK && path)
         st = sr_image_write(f->img, path, err, err_size);
     return st;
 }

@@ -70,7 +70,8 @@ sluice_status sr_film_resolve_tiles(sr_film *f, sr_film *extra, const uint32_t *
 
 /**
  * sr_film_resolve_tiles into the film's own image, then writes it to `path`
- * (the extension picks the format: .png, .exr, .hdr). On failure `err` says
+ * (the extension picks the format: .png, .exr, .hdr; NULL: resolved, with
+ * its non-finite pixels counted, but not written). On failure `err` says
  * why.
  */
 sluice_status sr_film_write(sr_film *f, const uint32_t *tile_samples, const char *path,
