@@ -585,13 +585,12 @@ static sluice_status gather(void *user, sluice_stream *points, size_t n)
             return st;
         }
     }
-    if (st == SLUICE_OK)
-        st = sluice_counters_reset(r->counters);
+    /* the counters count from the last read (restarted: no reset command) */
     if (st == SLUICE_OK)
         st = add_estimates(r, points, sr_film_accum(rt_renderer_film(r->whitted)), n);
     uint32_t c[GC_COUNT];
     if (st == SLUICE_OK)
-        st = sluice_counters_read(r->counters, c);
+        st = sluice_counters_read_restart(r->counters, c);
     if (st != SLUICE_OK) {
         sr_set_error(r->err, r->err_size, "radiance estimate: %s", sluice_context_error(r->ctx));
         r->gather_status = st;

@@ -287,9 +287,9 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
     rt_tracer *t = r->t;
     sluice_kernel *k = r->k_shade;
     uint32_t b = (uint32_t)base;
+    /* the counters count from the last slice's read (read and restarted
+     * below: no reset command) */
     sluice_status st = sluice_stream_clear(r->shadow);
-    if (st == SLUICE_OK)
-        st = sluice_counters_reset(r->counters);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_stream(k, 0, r->rays, 0);
     if (st == SLUICE_OK)
@@ -333,7 +333,7 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
         st = r->opt.gather(r->opt.gather_user, r->gather, ng);
     uint32_t c[SC_COUNT];
     if (st == SLUICE_OK)
-        st = sluice_counters_read(r->counters, c);
+        st = sluice_counters_read_restart(r->counters, c);
     if (st != SLUICE_OK)
         return st;
     r->stats.shades += c[SC_SHADES];
