@@ -51,66 +51,90 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
                       global const float *area_cdf, const pm_emit_args a)
 {
     uint bkey = rt_key(rt_key(a.seed, 0x5eb0u), a.base);
-    SLUICE_FOR_EACH (i) {
-        uint key = rt_key(rt_key(a.seed, 0x9407u), a.base + i);
-        int cone_range = i < a.cone_count;
-        uint j = cone_range ? i : i - a.cone_count; /* index in its strategy's sequence */
-        float2 up = rt_sobol2(rt_owen(i, rt_key(bkey, 1u)), rt_key(bkey, 2u));
-        float2 ud = rt_sobol2(rt_owen(j, rt_key(bkey, cone_range ? 3u : 4u)),
-                              rt_key(bkey, cone_range ? 5u : 6u));
-        float3 o, d, power;
-        float3 off;
-        float3 to;
-        float ps = 0.0f, omc = 0.0f;
-        int area = a.area_lights && rt_rand(key, 0u) < a.area_prob;
-        float3 ln = (float3)(0.0f), le;
-        if (area) {
-            float3 q;
-            uint lt =
-                rt_area_light_sample(up.x, up.y, a.area_lights, area_tris, area_cdf, tv, &q, &ln);
-            rt_material m = mats[tri_mat[lt]];
-            le = (float3)(m.er, m.eg, m.eb);
-            o = q;
-            off = ln * a.scene_eps;
-        } else {
-            uint l = min((uint)(up.x * (float)a.point_lights), a.point_lights - 1u);
-            rt_point_light pl = plights[l];
-            o = (float3)(pl.px, pl.py, pl.pz);
-            off = (float3)(0.0f);
-            le = (float3)(pl.ir, pl.ig, pl.ib);
+    const uint16 lane = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    /* 16 photons at a time: their keys and quasi-random numbers in vectors
+     * (integer hashes that ran scalar, one photon a loop turn), the same
+     * numbers as one at a time; the rest photon by photon */
+    SLUICE_FOR_EACH_RANGE (b, e) {
+        for (uint i0 = b; i0 < e; i0 += 16u) {
+            uint16 iv = (uint16)(i0) + lane;
+            int16 cone_v = iv < (uint16)(a.cone_count);
+            /* index in its strategy's sequence */
+            uint16 jv = select(iv - a.cone_count, iv, as_uint16(cone_v));
+            float keys_r0[16], u[4][16];
+            uint keys[16];
+            uint16 kv = rt_key16((uint16)(rt_key(a.seed, 0x9407u)), (uint16)(a.base) + iv);
+            vstore16(kv, 0, keys);
+            vstore16(rt_rand16(kv, 0u), 0, keys_r0);
+            float16 p0, p1, c0, c1, s0, s1;
+            rt_sobol2_16(rt_owen16(iv, rt_key(bkey, 1u)), rt_key(bkey, 2u), &p0, &p1);
+            rt_sobol2_16(rt_owen16(jv, rt_key(bkey, 3u)), rt_key(bkey, 5u), &c0, &c1);
+            rt_sobol2_16(rt_owen16(jv, rt_key(bkey, 4u)), rt_key(bkey, 6u), &s0, &s1);
+            vstore16(p0, 0, u[0]);
+            vstore16(p1, 0, u[1]);
+            vstore16(select(s0, c0, cone_v), 0, u[2]);
+            vstore16(select(s1, c1, cone_v), 0, u[3]);
+            for (uint l = 0; l < min(16u, e - i0); ++l) {
+                uint i = i0 + l, key = keys[l];
+                int cone_range = i < a.cone_count;
+                float2 up = (float2)(u[0][l], u[1][l]);
+                float2 ud = (float2)(u[2][l], u[3][l]);
+                float3 o, d, power;
+                float3 off;
+                float3 to;
+                float ps = 0.0f, omc = 0.0f;
+                int area = a.area_lights && keys_r0[l] < a.area_prob;
+                float3 ln = (float3)(0.0f), le;
+                if (area) {
+                    float3 q;
+                    uint lt = rt_area_light_sample(up.x, up.y, a.area_lights, area_tris, area_cdf,
+                                                   tv, &q, &ln);
+                    rt_material m = mats[tri_mat[lt]];
+                    le = (float3)(m.er, m.eg, m.eb);
+                    o = q;
+                    off = ln * a.scene_eps;
+                } else {
+                    uint l = min((uint)(up.x * (float)a.point_lights), a.point_lights - 1u);
+                    rt_point_light pl = plights[l];
+                    o = (float3)(pl.px, pl.py, pl.pz);
+                    off = (float3)(0.0f);
+                    le = (float3)(pl.ir, pl.ig, pl.ib);
+                }
+                to = (float3)(a.spec_x, a.spec_y, a.spec_z) - o;
+                float dist2 = dot(to, to), r2 = a.spec_r * a.spec_r;
+                float3 axis = (float3)(0.0f, 0.0f, 1.0f);
+                if (a.spec_prob > 0.0f && dist2 > r2) {
+                    float x = r2 / dist2;
+                    omc = x / (1.0f + sqrt(1.0f - x)); /* 1 - cos of the half-angle */
+                    axis = to * rsqrt(dist2);
+                    /* an area light's cone must reach its front side */
+                    ps = !area || dot(axis, ln) > -sqrt(x) ? a.spec_prob : 0.0f;
+                }
+                int in_cone = 0;
+                if (ps > 0.0f && cone_range) {
+                    d = rt_cone_dir(axis, omc, ud.x, ud.y);
+                    in_cone = 1;
+                } else {
+                    d = area ? rt_cosine_dir(ln, ud.x, ud.y) : rt_uniform_sphere(ud.x, ud.y);
+                    in_cone = ps > 0.0f && dot(d, axis) >= 1.0f - omc;
+                }
+                float cone_pdf = in_cone ? ps / (2.0f * RT_PI * omc) : 0.0f;
+                if (area) {
+                    /* Le cos A_total / (p_area pdf): Le pi A / p_area without the cone */
+                    float c = fmax(dot(d, ln), 0.0f);
+                    float pdf = (1.0f - ps) * c * (1.0f / RT_PI) + cone_pdf;
+                    power =
+                        pdf > 0.0f ? le * (c * a.area_total / (a.area_prob * pdf)) : (float3)(0.0f);
+                } else {
+                    float pdf = (1.0f - ps) / (4.0f * RT_PI) + cone_pdf;
+                    power = le * ((float)a.point_lights / ((1.0f - a.area_prob) * pdf));
+                }
+                /* the flight gets a key of its own: the bounce reads dimensions 1-4,
+                 * which emission used to choose this photon's light and direction */
+                rays[i] = rt_spawn(o, off, d, INFINITY, power, 0u, rt_key(key, 0x51u),
+                                   RT_KIND_PHOTON | PM_RAY_SPECULAR);
+            }
         }
-        to = (float3)(a.spec_x, a.spec_y, a.spec_z) - o;
-        float dist2 = dot(to, to), r2 = a.spec_r * a.spec_r;
-        float3 axis = (float3)(0.0f, 0.0f, 1.0f);
-        if (a.spec_prob > 0.0f && dist2 > r2) {
-            float x = r2 / dist2;
-            omc = x / (1.0f + sqrt(1.0f - x)); /* 1 - cos of the half-angle */
-            axis = to * rsqrt(dist2);
-            /* an area light's cone must reach its front side */
-            ps = !area || dot(axis, ln) > -sqrt(x) ? a.spec_prob : 0.0f;
-        }
-        int in_cone = 0;
-        if (ps > 0.0f && cone_range) {
-            d = rt_cone_dir(axis, omc, ud.x, ud.y);
-            in_cone = 1;
-        } else {
-            d = area ? rt_cosine_dir(ln, ud.x, ud.y) : rt_uniform_sphere(ud.x, ud.y);
-            in_cone = ps > 0.0f && dot(d, axis) >= 1.0f - omc;
-        }
-        float cone_pdf = in_cone ? ps / (2.0f * RT_PI * omc) : 0.0f;
-        if (area) {
-            /* Le cos A_total / (p_area pdf): Le pi A / p_area without the cone */
-            float c = fmax(dot(d, ln), 0.0f);
-            float pdf = (1.0f - ps) * c * (1.0f / RT_PI) + cone_pdf;
-            power = pdf > 0.0f ? le * (c * a.area_total / (a.area_prob * pdf)) : (float3)(0.0f);
-        } else {
-            float pdf = (1.0f - ps) / (4.0f * RT_PI) + cone_pdf;
-            power = le * ((float)a.point_lights / ((1.0f - a.area_prob) * pdf));
-        }
-        /* the flight gets a key of its own: the bounce reads dimensions 1-4,
-         * which emission used to choose this photon's light and direction */
-        rays[i] = rt_spawn(o, off, d, INFINITY, power, 0u, rt_key(key, 0x51u),
-                           RT_KIND_PHOTON | PM_RAY_SPECULAR);
     }
 }
 

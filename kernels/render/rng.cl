@@ -65,6 +65,7 @@ inline float16 rt_rand16(uint16 key, uint dim)
     }
 RT_RNG_BITS_(uint, rt_reverse_bits, rt_owen_reversed_)
 RT_RNG_BITS_(uint8, rt_reverse_bits8, rt_owen_reversed8_)
+RT_RNG_BITS_(uint16, rt_reverse_bits16, rt_owen_reversed16_)
 
 /* A nested uniform (Owen) scramble of x read as a binary fraction, keyed by
  * `seed`: each bit is flipped or not by a hash of the bits above it, so an
@@ -76,6 +77,12 @@ RT_RNG_BITS_(uint8, rt_reverse_bits8, rt_owen_reversed8_)
 inline uint rt_owen(uint x, uint seed)
 {
     return rt_owen_reversed_(rt_reverse_bits(x), seed);
+}
+
+/* rt_owen on 16 lanes (the same numbers lane by lane). */
+inline uint16 rt_owen16(uint16 x, uint seed)
+{
+    return rt_owen_reversed16_(rt_reverse_bits16(x), seed);
 }
 
 /* The second dimension's bit 31 - j is the XOR of the bits i of k with C(i,
@@ -108,13 +115,16 @@ inline float2 rt_sobol2(uint k, uint seed)
     return (float2)((float)(x >> 8), (float)(y >> 8)) * (1.0f / 16777216.0f);
 }
 
-/* rt_sobol2 for the 8 points k (lane by lane the same numbers): the first
- * coordinates in *u0, the second in *u1. */
-inline void rt_sobol2_8(uint8 k, uint seed, float8 *u0, float8 *u1)
-{
-    RT_SOBOL2_BITS_(uint8, rt_owen_reversed8_, k, seed, x, y);
-    *u0 = convert_float8(x >> 8) * (1.0f / 16777216.0f);
-    *u1 = convert_float8(y >> 8) * (1.0f / 16777216.0f);
-}
+/* rt_sobol2 for the 8 or 16 points k (lane by lane the same numbers): the
+ * first coordinates in *u0, the second in *u1. */
+#define RT_SOBOL2_N_(N)                                                                            \
+    inline void rt_sobol2_##N(uint##N k, uint seed, float##N *u0, float##N *u1)                    \
+    {                                                                                              \
+        RT_SOBOL2_BITS_(uint##N, rt_owen_reversed##N##_, k, seed, x, y);                           \
+        *u0 = convert_float##N(x >> 8) * (1.0f / 16777216.0f);                                     \
+        *u1 = convert_float##N(y >> 8) * (1.0f / 16777216.0f);                                     \
+    }
+RT_SOBOL2_N_(8)
+RT_SOBOL2_N_(16)
 
 #endif
