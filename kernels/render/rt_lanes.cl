@@ -368,9 +368,12 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
  * (v0, e1, e2) in the lanes of mask m, keeping hits nearer than t and not
  * past limit in (tri, t, u, v), which are lvalues. With quit set (a
  * constant) it stops after u when `any` (rt_any16 or rt_any8) finds no lane
- * left (rt_intersect16_core). */
-#define RT_MT_(F, I, quit, any, itri, mask, ox, oy, oz, dx, dy, dz, tmin, limit, tri, t, u, v,     \
-               v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z)                                        \
+ * left (rt_intersect16_core); with pre set too, before u's division when a
+ * conservative test finds none (16 lanes: cornell's shadow rays 8-12%
+ * faster with AVX-512 kernels; with AVX2's halves of 8, 2.5% slower on
+ * cornell's eye rays, so they go without; bench/README.md). */
+#define RT_MT_(F, I, quit, pre, any, itri, mask, ox, oy, oz, dx, dy, dz, tmin, limit, tri, t, u,   \
+               v, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z)                                     \
     do {                                                                                           \
         F pvx_ = RT_FMS_(dy, e2z, dz, e2y), pvy_ = RT_FMS_(dz, e2x, dx, e2z),                      \
           pvz_ = RT_FMS_(dx, e2y, dy, e2x);                                                        \
@@ -378,7 +381,7 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
         I m_ = (mask) & (det_ != 0.0f);                                                            \
         F sx_ = (ox) - (v0x), sy_ = (oy) - (v0y), sz_ = (oz) - (v0z);                              \
         F un_ = RT_DOT_(sx_, pvx_, sy_, pvy_, sz_, pvz_);                                          \
-        if (quit) {                                                                                \
+        if ((quit) && (pre)) {                                                                     \
             /* before the division: lanes whose u = un / det is surely out                         \
              * of [0, 1] (un against det's sign below -2^-100 |det| or above                       \
              * (1 + 2^-20) |det|: the rounded u below is then out too), so                         \
@@ -406,7 +409,7 @@ inline int16 rt_cell_index16(const rt_grid_args *g, int16 cx, int16 cy, int16 cz
 
 /* RT_MT_ on the half h (lo or hi) of 16 lanes, 8 lanes wide. */
 #define RT_MT_HALF_(h, quit, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z)        \
-    RT_MT_(float8, int8, quit, rt_any8, (tri).h, (m).h, (P)->ox.h, (P)->oy.h, (P)->oz.h,           \
+    RT_MT_(float8, int8, quit, 0, rt_any8, (tri).h, (m).h, (P)->ox.h, (P)->oy.h, (P)->oz.h,        \
            (P)->dx.h, (P)->dy.h, (P)->dz.h, (P)->tmin.h, (limit).h, (P)->tri.h, (P)->t.h,          \
            (P)->u.h, (P)->v.h, (v0x).h, (v0y).h, (v0z).h, (e1x).h, (e1y).h, (e1z).h, (e2x).h,      \
            (e2y).h, (e2z).h)
@@ -434,7 +437,7 @@ rt_intersect16_core(int16 tri, int16 m, rt_packet *P, float16 limit, float16 v0x
     if (mm >> 8)
         RT_MT_HALF_(hi, quit, tri, m, P, limit, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
 #else
-    RT_MT_(float16, int16, quit, rt_any16, tri, m, P->ox, P->oy, P->oz, P->dx, P->dy, P->dz,
+    RT_MT_(float16, int16, quit, 1, rt_any16, tri, m, P->ox, P->oy, P->oz, P->dx, P->dy, P->dz,
            P->tmin, limit, P->tri, P->t, P->u, P->v, v0x, v0y, v0z, e1x, e1y, e1z, e2x, e2y, e2z);
 #endif
 }
