@@ -360,6 +360,11 @@ SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
  * SLUICE_FOR_EACH_BLOCK_OF names another multiple of 4. */
 #define SLUICE_BLOCK 4u
 
+/* The lane numbers 0 to 15 of a 16-wide vector: a block of 16 records' offsets
+ * from its first. */
+#define SLUICE_LANE16                                                                              \
+    ((uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u))
+
 /* The records of this work-item. Contiguous chunks (the range form, or a
  * launch without `interleave`): work-item i takes [i chunk, (i + 1) chunk),
  * the layout for CPUs, where one work-item walking its chunk runs like a C

@@ -51,13 +51,12 @@ __kernel void pm_emit(SLUICE_PARAMS, global rt_ray *rays, global const float *tv
                       global const float *area_cdf, const pm_emit_args a)
 {
     uint bkey = rt_key(rt_key(a.seed, 0x5eb0u), a.base);
-    const uint16 lane = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     /* 16 photons at a time: their keys and quasi-random numbers in vectors
      * (integer hashes that ran scalar, one photon a loop turn), the same
      * numbers as one at a time; the rest photon by photon */
     SLUICE_FOR_EACH_RANGE (b, e) {
         for (uint i0 = b; i0 < e; i0 += 16u) {
-            uint16 iv = (uint16)(i0) + lane;
+            uint16 iv = (uint16)(i0) + SLUICE_LANE16;
             int16 cone_v = iv < (uint16)(a.cone_count);
             /* index in its strategy's sequence */
             uint16 jv = select(iv - a.cone_count, iv, as_uint16(cone_v));

@@ -19,7 +19,6 @@
 __kernel void rt_raygen(SLUICE_PARAMS, global rt_ray *rays, const rt_frame f,
                         global const uint *tiles)
 {
-    const uint16 lane = (uint16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     uint tiles_x = (f.width + 7u) / 8u;
     /* 16 rays at a time: their positions, keys, jitter and directions in
      * vectors (one ray per loop turn ran scalar, several times slower than
@@ -40,7 +39,7 @@ __kernel void rt_raygen(SLUICE_PARAMS, global rt_ray *rays, const rt_frame f,
                 tx[l] = lx;
                 ty[l] = ly;
             }
-            uint16 within = ((uint16)(i0) + lane) % 64u;
+            uint16 within = ((uint16)(i0) + SLUICE_LANE16) % 64u;
             uint16 x = vload16(0, tx) * 8u + (within >> 4 & 1u) * 4u + (within & 3u);
             uint16 y = vload16(0, ty) * 8u + (within >> 5) * 4u + (within >> 2 & 3u);
             int16 inside = (x < f.width) & (y < f.height);

@@ -54,8 +54,7 @@ inline void rt_walk16_load(global const rt_ray *rays, global const rt_walk *walk
 #ifdef RT_AOS16_
     /* ids in a run (a pass's stream keeps most of its chunks' order): the
      * rays are neighbours, read as whole lines (rt_packet_load_run) */
-    const uint16 lane =
-        (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+    const uint16 lane = SLUICE_LANE16;
     if (sluice_mask16(as_int16(ids == (uint16)ids.s0 + lane)) == (ushort)0xffffu)
         rt_packet_load_run(rays, ids.s0, r);
     else
@@ -251,8 +250,7 @@ __kernel void rt_setup(SLUICE_PARAMS, global const rt_ray *rays, global uint *co
                        global const uint *cell_start, const rt_grid_args g, global const uint *bits)
 {
     SLUICE_FOR_EACH_RANGE (lo, hi) {
-        const uint16 lane =
-            (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+        const uint16 lane = SLUICE_LANE16;
         uint i = lo, visited_all = 0u, done_all = 0u, entered_all = 0u;
         uint n = SLUICE_LENGTH;
         for (; RT_BLOCKS16 && i + 16u <= hi; i += 16u) {
@@ -569,8 +567,7 @@ __kernel void rt_intersect(SLUICE_PARAMS, global const uint *ids, global uint *c
              * block of the pass before): the records whole, as rt_setup
              * writes them (a finished ray's walk is never read; unchanged
              * fields are written back as read) */
-            const uint16 lane16 =
-                (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+            const uint16 lane16 = SLUICE_LANE16;
             if (sluice_mask16(as_int16(idv == (uint16)idv.s0 + lane16)) == (ushort)0xffffu) {
                 uint16 steps = as_uint16(rt_gather_i(hw, hat + 4, (int16)-1)) + visited,
                        tests = tests0 + tested;
@@ -657,8 +654,7 @@ __kernel void rt_route_setup(SLUICE_PARAMS, global const uint *codes, global uin
                              global uint *isect)
 {
     SLUICE_FOR_EACH_RANGE (b, e) {
-        const uint16 lane =
-            (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+        const uint16 lane = SLUICE_LANE16;
         uint i = b;
         for (; i + 16u <= e; i += 16u) {
             uint16 cv = vload16(0, codes + i), x = (uint16)i + lane;
