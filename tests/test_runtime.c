@@ -977,6 +977,79 @@ static void test_errors(sluice_context *ctx)
           "status string");
 }
 
+/* The value program `p` (kernel `put`, writing VAL to every record) writes,
+ * or UINT32_MAX when it cannot be run. */
+static uint32_t put_value(sluice_context *ctx, sluice_program *p)
+{
+    sluice_kernel *k = NULL;
+    sluice_stream *o = NULL;
+    uint32_t got[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX};
+    CHECK_OK(ctx, sluice_kernel_create(p, "put", &k));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, 3, &o));
+    if (k && o && sluice_kernel_set_stream(k, 0, o, 0) == SLUICE_OK &&
+        sluice_kernel_launch_count(k, 3) == SLUICE_OK &&
+        sluice_stream_set_length(o, 3) == SLUICE_OK)
+        CHECK_OK(ctx, sluice_stream_download(o, got, 3, NULL));
+    sluice_kernel_destroy(k);
+    sluice_stream_destroy(o);
+    CHECK(got[0] == got[1] && got[1] == got[2], "put wrote %u %u %u", got[0], got[1], got[2]);
+    return got[0];
+}
+
+/* Programs built before in the context are taken again for the same text
+ * and options (program_cache.h), never for another text or other options,
+ * with the same build log, while another program of the same text lives
+ * or after it is gone, and after more programs than are kept have pushed
+ * the first one out. */
+static void test_kept_programs(sluice_context *ctx)
+{
+    const char *src = "#include \"sluice.cl\"\n"
+                      "#warning kept program warning\n"
+                      "__kernel void put(SLUICE_PARAMS, global uint *x)\n"
+                      "{ SLUICE_FOR_EACH(i) x[i] = VAL; }\n";
+    const char *other = "#include \"sluice.cl\"\n"
+                        "__kernel void put(SLUICE_PARAMS, global uint *x)\n"
+                        "{ SLUICE_FOR_EACH(i) x[i] = VAL + 100u; }\n";
+    sluice_program *a = NULL, *b = NULL, *c = NULL;
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "kept.cl", src, "-DVAL=1u", &a));
+    CHECK(put_value(ctx, a) == 1u, "first build");
+    CHECK(strstr(sluice_program_build_log(a), "kept program warning") != NULL, "log: [%s]",
+          sluice_program_build_log(a));
+    /* the same text and options while the first lives, then after it is gone */
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "kept.cl", src, "-DVAL=1u", &b));
+    CHECK(put_value(ctx, b) == 1u, "the same text again");
+    CHECK(strcmp(sluice_program_build_log(a), sluice_program_build_log(b)) == 0,
+          "the same log: [%s] [%s]", sluice_program_build_log(a), sluice_program_build_log(b));
+    sluice_program_destroy(a);
+    CHECK(put_value(ctx, b) == 1u, "the second after the first is gone");
+    sluice_program_destroy(b);
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "kept.cl", src, "-DVAL=1u", &a));
+    CHECK(put_value(ctx, a) == 1u, "the same text after both are gone");
+    sluice_program_destroy(a);
+    /* other options, another text: their own programs */
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "kept.cl", src, "-DVAL=2u", &b));
+    CHECK(put_value(ctx, b) == 2u, "other options");
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "kept.cl", other, "-DVAL=2u", &c));
+    CHECK(put_value(ctx, c) == 102u, "another text");
+    CHECK(strstr(sluice_program_build_log(c), "kept program warning") == NULL,
+          "another text's log: [%s]", sluice_program_build_log(c));
+    sluice_program_destroy(b);
+    sluice_program_destroy(c);
+    /* more than the context keeps, then the first again */
+    for (unsigned v = 3; v < 3 + 33; ++v) {
+        char opt[32];
+        snprintf(opt, sizeof opt, "-DVAL=%uu", v);
+        CHECK_OK(ctx, sluice_program_create_source(ctx, "kept.cl", other, opt, &a));
+        CHECK_OK(ctx, sluice_program_build(a));
+        sluice_program_destroy(a);
+    }
+    CHECK_OK(ctx, sluice_program_create_source(ctx, "kept.cl", src, "-DVAL=1u", &a));
+    CHECK(put_value(ctx, a) == 1u, "the first text after 33 others");
+    CHECK(strstr(sluice_program_build_log(a), "kept program warning") != NULL, "log: [%s]",
+          sluice_program_build_log(a));
+    sluice_program_destroy(a);
+}
+
 /* Finds the profile entry called `name`; 0 when there is none. */
 static int profile_find(sluice_context *ctx, const char *name, sluice_profile_entry *e)
 {
@@ -1266,6 +1339,7 @@ int main(void)
     test_loop_overflow(ctx, p, SLUICE_ORDERED);
     test_loop_overflow(ctx, p, SLUICE_UNORDERED);
     test_errors(ctx);
+    test_kept_programs(ctx);
     sluice_program_destroy(p);
     sluice_context_destroy(ctx);
     test_profile();

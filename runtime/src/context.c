@@ -1,6 +1,8 @@
 /* Device selection, the context, its variable pool and scratch. */
 #include "internal.h"
 
+#include "program_cache.h"
+
 #include <ctype.h>
 #include <stdlib.h>
 #include <string.h>
@@ -299,6 +301,7 @@ void sluice_context_destroy(sluice_context *ctx)
         }
         free(ctx->embedded);
     }
+    sl_program_cache_clear(ctx);
     sluice_context_release_scratch(ctx);
     if (ctx->vars)
         clReleaseMemObject(ctx->vars);

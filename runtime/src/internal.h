@@ -106,6 +106,11 @@ struct sluice_context {
     struct sluice_kernel *kernels; /* live kernels (for profile counts) */
     struct sluice_stream *streams; /* live streams (to name where an overflow began) */
     cl_kernel map_length_kernel;   /* sets mapped outputs' lengths on the device */
+    /* Programs built here, kept for the next build of the same text
+     * (program_cache.h). */
+    struct sl_kept_program *kept;
+    size_t kept_count;
+    unsigned long long kept_clock;
 };
 
 /* What last wrote a stream's length on the device, for overflow messages. */

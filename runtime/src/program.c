@@ -2,6 +2,7 @@
 #include "internal.h"
 
 #include "build_log.h"
+#include "program_cache.h"
 
 #include <errno.h>
 #include <pthread.h>
@@ -258,27 +259,37 @@ sluice_status sluice_program_build(sluice_program *p)
         return SLUICE_OK;
     sluice_context *ctx = p->ctx;
     cl_int err;
-    const char *src = p->source;
-    cl_program prog = clCreateProgramWithSource(ctx->cl, 1, &src, NULL, &err);
-    if (!prog)
-        return sl_cl_fail(ctx, err, "clCreateProgramWithSource");
     size_t ol = strlen(p->options) + strlen(ctx->build_options) + 128;
     char *opts = malloc(ol);
-    if (!opts) {
-        clReleaseProgram(prog);
+    if (!opts)
         return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
-    }
     /* the interleaved layout's stream kernels reserve room per work-group
      * (group emission, kernels/sluice.cl); off CPUs the loops over a
      * work-item's outputs are unrolled, to keep its state in registers */
     snprintf(opts, ol, "-cl-std=CL1.2%s%s%s %s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "",
              ctx->layout == SLUICE_LAYOUT_INTERLEAVED ? " -DSLUICE_GROUP_EMIT_" : "",
              ctx->info.is_cpu ? "" : " -DSLUICE_UNROLL_STATE_", p->options, ctx->build_options);
+    /* built before in this context: taken as it is (verbose builds compile
+     * again, so that the compiler's own output shows) */
+    char *kept_log = NULL;
+    cl_program kept = ctx->verbose ? NULL : sl_program_cache_find(ctx, opts, p->source, &kept_log);
+    if (kept) {
+        free(opts);
+        free(p->log);
+        p->log = kept_log;
+        p->cl = kept;
+        return SLUICE_OK;
+    }
+    const char *src = p->source;
+    cl_program prog = clCreateProgramWithSource(ctx->cl, 1, &src, NULL, &err);
+    if (!prog) {
+        free(opts);
+        return sl_cl_fail(ctx, err, "clCreateProgramWithSource");
+    }
     stderr_capture capture;
     capture_begin(&capture);
     err = clBuildProgram(prog, 1, &ctx->device, opts, NULL, NULL);
     capture_end(&capture, err != CL_SUCCESS || ctx->verbose);
-    free(opts);
     size_t log_size = 0;
     clGetProgramBuildInfo(prog, ctx->device, CL_PROGRAM_BUILD_LOG, 0, NULL, &log_size);
     char *log = malloc(log_size + 1);
@@ -301,11 +312,14 @@ sluice_status sluice_program_build(sluice_program *p)
                 p->log[n - 1] == '\n' ? "" : "\n");
     }
     if (err != CL_SUCCESS) {
+        free(opts);
         clReleaseProgram(prog);
         if (err == CL_BUILD_PROGRAM_FAILURE || err == CL_INVALID_BUILD_OPTIONS)
             return build_failure(p);
         return sl_cl_fail(ctx, err, "clBuildProgram");
     }
+    sl_program_cache_add(ctx, opts, p->source, prog, p->log);
+    free(opts);
     p->cl = prog;
     return SLUICE_OK;
 }

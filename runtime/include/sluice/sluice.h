@@ -335,6 +335,14 @@ void sluice_program_destroy(sluice_program *program);
  * except that count, which is passed on too when the build failed. Builds
  * on several threads (several contexts) take turns at that redirection,
  * under one process-wide lock, so fresh builds do not run in parallel.
+ *
+ * A context keeps the last 32 programs it built, and a build of the same
+ * text with the same options (a renderer's tracer made again, for another
+ * view or pass) takes the kept one at once, with the same log, instead of
+ * compiling again: the driver's own cache still runs the compiler's front
+ * end each time (PoCL preprocesses the whole text, tenths of a second for a
+ * renderer). Kernels are created afresh from it. Verbose builds always
+ * compile.
  */
 sluice_status sluice_program_build(sluice_program *program);
 
