@@ -69,9 +69,11 @@ mitsuba-agreement: references
 	    bench/mitsuba_compare.py --scene-exe $(BUILD)/apps/common/sluice-scene \
 	    --raytrace $(BUILD)/apps/raytrace/sluice-raytrace
 
+# The kernels are the same as the plain build's: its PoCL cache (filled by
+# `make test` before, as in CI) spares the sanitizer run their compiles.
 $(ASAN_BUILD)/build.ninja: | deps
 	meson setup $(ASAN_BUILD) -Dbuildtype=debug -Db_sanitize=address,undefined \
-	    -Db_lundef=false $(MESON_FLAGS)
+	    -Db_lundef=false -Dpocl_cache_dir=$(CURDIR)/$(BUILD)/pocl-cache $(MESON_FLAGS)
 
 asan: deps $(ASAN_BUILD)/build.ninja
 	ninja -C $(ASAN_BUILD)
