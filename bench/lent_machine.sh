@@ -109,7 +109,7 @@ if [ "${1:-}" = --pack ]; then
     cp /usr/share/glmark2/models/bunny.obj .carry/
     du -sh .carry build
     # the tool carries 64 MiB at most; PoCL's caches are no use there
-    echo "carry at most 64 MiB: remove build/pocl-cache* and build/tests/pocl-cache* first if build is large"
+    echo "carry at most 64 MiB: move build/pocl-cache* (and build/tests/pocl-cache*, build/bench/pocl-cache* of older builds) out of build first if it is large"
     exit 0
 fi
 OUT=${1:?usage: lent_machine.sh OUTDIR DEADLINE_S PHASE...}
