@@ -1,4 +1,6 @@
-/* Tests of sluice_sort_bitonic and sluice_sort_radix against qsort: many
+/* Tests of sluice_sort_bitonic and sluice_sort_radix against a plain C
+ * sort (check_radix, tests/check.h: stable, so pairs of key and original
+ * index come out in the order qsort by key then index gives): many
  * lengths (powers of two and their neighbours), key patterns, with and
  * without values, radix stability, and the error paths. */
 #include "check.h"
@@ -12,13 +14,14 @@ typedef struct pair {
     uint32_t key, index;
 } pair;
 
-/* Orders by key, then by original index: the stable order. */
-static int cmp_pair(const void *a, const void *b)
+/* Byte b of a pair's key, for check_radix: a stable sort of pairs listed
+ * by original index orders them by key, then by index (the stable order). */
+static unsigned pair_key_byte(const unsigned char *r, size_t byte, size_t arg)
 {
-    const pair *x = a, *y = b;
-    if (x->key != y->key)
-        return x->key < y->key ? -1 : 1;
-    return (x->index > y->index) - (x->index < y->index);
+    (void)arg;
+    pair p;
+    memcpy(&p, r, sizeof p);
+    return (p.key >> (8 * byte)) & 255u;
 }
 
 enum { RANDOM, EQUAL, SORTED, REVERSE, HIGH, FEW, PATTERNS };
@@ -71,7 +74,7 @@ static void run_case(sluice_context *ctx, const char *name, sort_fn sort, int st
         ref[i].index = (uint32_t)i;
         idx[i] = (uint32_t)i;
     }
-    qsort(ref, n, sizeof *ref, cmp_pair);
+    CHECK(check_radix(ref, n, sizeof *ref, sizeof ref->key, pair_key_byte, 0), "out of memory");
     CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &sk));
     CHECK_OK(ctx, sluice_stream_upload(sk, k, n));
     if (with_values) {
