@@ -172,11 +172,18 @@ static inline unsigned check_byte_mem_(const unsigned char *r, size_t byte, size
     return r[rs - 1 - byte];
 }
 
+/* Sorts n records of rs bytes stably by the uint32 each starts with
+ * (ascending). Returns 0 when out of memory. */
+static inline int check_sort_by_u32(void *records, size_t n, size_t rs)
+{
+    return check_radix(records, n, rs, sizeof(uint32_t), check_byte_u32_, 0);
+}
+
 /* Sorts n uint32 values into ascending order. Returns 0 when out of
  * memory. */
 static inline int check_sort_u32(uint32_t *v, size_t n)
 {
-    return check_radix(v, n, sizeof *v, sizeof *v, check_byte_u32_, 0);
+    return check_sort_by_u32(v, n, sizeof *v);
 }
 
 /* Sorts n records of rs bytes into memcmp's order. Returns 0 when out of

@@ -1,5 +1,5 @@
 /* Tests of sluice_sort_bitonic and sluice_sort_radix against a plain C
- * sort (check_radix, tests/check.h: stable, so pairs of key and original
+ * sort (check_sort_by_u32, tests/check.h: stable, so pairs of key and original
  * index come out in the order qsort by key then index gives): many
  * lengths (powers of two and their neighbours), key patterns, with and
  * without values, radix stability, and the error paths. */
@@ -13,16 +13,6 @@ typedef sluice_status (*sort_fn)(sluice_context *, sluice_stream *, sluice_strea
 typedef struct pair {
     uint32_t key, index;
 } pair;
-
-/* Byte b of a pair's key, for check_radix: a stable sort of pairs listed
- * by original index orders them by key, then by index (the stable order). */
-static unsigned pair_key_byte(const unsigned char *r, size_t byte, size_t arg)
-{
-    (void)arg;
-    pair p;
-    memcpy(&p, r, sizeof p);
-    return (p.key >> (8 * byte)) & 255u;
-}
 
 enum { RANDOM, EQUAL, SORTED, REVERSE, HIGH, FEW, PATTERNS };
 static const char *pattern_name[] = {"random", "equal", "sorted", "reverse", "high bits", "few"};
@@ -74,7 +64,8 @@ static void run_case(sluice_context *ctx, const char *name, sort_fn sort, int st
         ref[i].index = (uint32_t)i;
         idx[i] = (uint32_t)i;
     }
-    CHECK(check_radix(ref, n, sizeof *ref, sizeof ref->key, pair_key_byte, 0), "out of memory");
+    /* listed by index, sorted stably by key: key, then index */
+    CHECK(check_sort_by_u32(ref, n, sizeof *ref), "out of memory");
     CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &sk));
     CHECK_OK(ctx, sluice_stream_upload(sk, k, n));
     if (with_values) {
