@@ -42,17 +42,18 @@
 #define COMPACT_BLOCK 16u
 #endif
 
-/* COMPACT_NEXT: an unordered output's chunk is counted, then written, so
- * while a chunk is written (its records already in the cache) the memory
- * bus would idle; the block kernels ask for the two lines at the same place
- * of the next chunk, which on a CPU the same thread runs next (PoCL runs a
- * group's work-items one after another), and its count pass finds them in
- * the cache (bench/README.md, bench_streams). */
-#define COMPACT_NEXT_(p, i, len)                                                                   \
+/* COMPACT_NEXT: a chunk is counted, then written, so while a chunk is
+ * written (its records already in the cache) the memory bus would idle; the
+ * block kernels ask for the two lines at the same place of the next chunk
+ * that the same thread runs (SLUICE_AHEAD: on a CPU the next work-item of
+ * the group, which PoCL runs next, or in a chained launch the chunk of the
+ * ticket taken for it), and its count pass finds them in the cache
+ * (bench/README.md, bench_streams). */
+#define COMPACT_NEXT_(p, i)                                                                        \
     do {                                                                                           \
         if (SLUICE_WRITING) {                                                                      \
-            SLUICE_PREFETCH((p) + (i) + (len));                                                    \
-            SLUICE_PREFETCH((p) + (i) + 16u + (len));                                              \
+            SLUICE_PREFETCH((p) + (i) + SLUICE_AHEAD);                                             \
+            SLUICE_PREFETCH((p) + (i) + 16u + SLUICE_AHEAD);                                       \
         }                                                                                          \
     } while (0)
 
@@ -70,7 +71,7 @@ __kernel void compact_w1(SLUICE_PARAMS, global const uint *in, global const uint
                 x = SLUICE_LOAD16(in + i);
                 y = SLUICE_LOAD16(in + i + 16u);
             }
-            COMPACT_NEXT_(flags, i, e - b);
+            COMPACT_NEXT_(flags, i);
             ushort mx = sluice_mask16(as_int16(SLUICE_LOAD16(flags + i) != (uint16)0u));
             ushort my = sluice_mask16(as_int16(SLUICE_LOAD16(flags + i + 16u) != (uint16)0u));
             SLUICE_EMIT16(0, out, x, mx);
@@ -173,7 +174,7 @@ __kernel void split_w1(SLUICE_PARAMS, global const uint *in, global const uint *
             uint16 bv = SLUICE_LOAD16(buckets + i), x = (uint16)0u;
             if (SLUICE_WRITING) /* the records only in the pass that writes them */
                 x = SLUICE_LOAD16(in + i);
-            COMPACT_NEXT_(buckets, i, hi - lo);
+            COMPACT_NEXT_(buckets, i);
             SPLIT16_SLOT_(0, o0);
             SPLIT16_SLOT_(1, o1);
             SPLIT16_SLOT_(2, o2);
@@ -236,7 +237,7 @@ __kernel void split_words(SLUICE_PARAMS, global const uint *in, global const uin
             uint i = b;                                                                            \
             for (; SLUICE_EMIT16_FAST && i + 32u <= e; i += 32u) { /* COMPACT_AHEAD */             \
                 uint16 x = SLUICE_LOAD16(in + i), y = SLUICE_LOAD16(in + i + 16u);                 \
-                COMPACT_NEXT_(in, i, e - b);                                                       \
+                COMPACT_NEXT_(in, i);                                                              \
                 ushort mx = sluice_mask16(as_int16(AS16(x) < (T16)t));                             \
                 ushort my = sluice_mask16(as_int16(AS16(y) < (T16)t));                             \
                 SLUICE_EMIT16(0, below, x, mx);                                                    \

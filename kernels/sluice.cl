@@ -116,7 +116,8 @@ typedef struct sluice_launch_ {
     uint n_fixed;      /* input length when the host knows it, else SLUICE_NONE */
     uint in_var;       /* index of the input length in the variable pool */
     uint chunk;        /* records per work-item */
-    uint mode;         /* 0: one launch, 1: ordered count launch, 2: ordered write */
+    uint mode;         /* 0: one launch, 1: ordered count launch, 2: ordered write,
+                          3: ordered in one launch (the chain, below) */
     uint first_pass;   /* 0 when the count pass runs, else 1 */
     uint ordered_mask; /* bit k: output k is ordered */
     uint out_mask;     /* bit k: output k is bound */
@@ -128,6 +129,7 @@ typedef struct sluice_launch_ {
     uint n_map;        /* mapped outputs whose length the launch sets (n_fixed is SLUICE_NONE) */
     uint interleave;   /* 1: SLUICE_FOR_EACH interleaves its records within a work-group */
     uint spread;       /* work-group g takes the chunks of group g * spread mod groups */
+    uint epoch;        /* mode 3: this launch's tag in the chain's flags */
     uint out_var[SLUICE_MAX_OUTPUTS]; /* output lengths in the pool */
     uint out_cap[SLUICE_MAX_OUTPUTS]; /* output capacities (records) */
     uint map_var[SLUICE_MAX_OUTPUTS]; /* the lengths of those mapped outputs */
@@ -159,6 +161,7 @@ typedef struct sluice_state_ {
     uint omask;      /* ordered outputs placed by the group (group order), else 0 */
     uint stepped;    /* 1: their places come from a scan per step (not a range's) */
     uint chunk_id;
+    uint ahead; /* records from this chunk to the next this thread takes (SLUICE_AHEAD) */
     uint group;                   /* 1: the group reserves room together (group emission) */
     local uint *lds;              /* its cursors, starts and ends (SLUICE_LDS_WORDS_) */
     uint cnt[SLUICE_MAX_OUTPUTS]; /* records this chunk emits, per output */
@@ -350,6 +353,124 @@ SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
     }
 }
 
+/* The chain: ordered outputs in one launch (mode 3), for the contiguous
+ * layout on CPUs. The count launch, the scan and the write launch read the
+ * whole input twice from memory; here each work-item counts its chunk, takes
+ * its chunk's places from the chunks before it by decoupled look-back
+ * (Merrill and Garland, "Single-pass Parallel Prefix Scan with Decoupled
+ * Look-back", 2016) and writes the chunk while it is still in the cache.
+ * Chunks are numbered in the order work-items take them (a ticket from an
+ * atomic counter), not by work-item id: PoCL hands a thread a run of
+ * consecutive work-groups, and a chunk that waited on the end of another
+ * thread's run would wait for all of it. So a chunk waits only on chunks
+ * already taken, by work-items that run on a thread of their own or on one
+ * that gets to them without waiting on anything later: the lowest
+ * unfinished chunk waits on nobody, and the chain moves. A work-item takes
+ * the ticket of the next work-item of its group (local memory) after its
+ * look-back and before its write pass: PoCL runs a group's work-items one
+ * after another on one thread, so that is the chunk this thread takes next,
+ * and the write pass can ask for its first lines ahead (SLUICE_AHEAD). (The
+ * two threads take alternate chunks; without the ticket ahead, the write
+ * pass's prefetch of the adjacent chunk fetched the other thread's, and
+ * ordered splits ran 30% slower than unordered ones; bench/README.md. A
+ * ticket per work-group, for runs of G chunks, was slower still: a group
+ * publishes nothing before its last work-item has counted.)
+ * Implementations that run a group's work-items side by side in SIMD lanes
+ * would have a lane wait on the one before it, and the tickets handed on
+ * need them in turn: the host chains launches on PoCL only (kernel.c).
+ *
+ * The scratch buffer is the context's chain buffer (the host's
+ * sl_chain_reserve; zeroed when made): word 0 the ticket counter, which the
+ * work-item drawing the launch's last ticket sets back to 0; then a flag per
+ * chunk, stride words; then, per ordered output up to the highest (rows), a
+ * row of each chunk's count (published first, so that the next chunk need
+ * not wait for this one's look-back) and a row of each chunk's inclusive end
+ * (its place plus its count). A flag is the launch's epoch (the host's,
+ * different in every mode-3 launch, so flags of earlier launches never
+ * count) shifted by 2, or-ed with what is published: 1 the count, 2 the end.
+ * Values are written before their flag and read after it. */
+#define SLUICE_CHAIN_COUNT_ 1u
+#define SLUICE_CHAIN_END_ 2u
+
+#ifndef SLUICE_GROUP_EMIT_
+/* A chunk number of a mode-3 launch. */
+SLUICE_INLINE_ uint sluice_chain_ticket_(global uint *chain)
+{
+    uint t = atomic_inc(chain);
+    if (t == (uint)get_global_size(0) - 1u) /* every ticket is taken */
+        atomic_xchg(chain, 0u);
+    return t;
+}
+
+/* After a mode-3 chunk's count pass: the places of its ordered outputs'
+ * records (pos, lim), from the counts and ends of the chunks before it, and
+ * its own published. The last chunk sets the outputs' lengths (the scan
+ * kernel's job in modes 1 and 2): their length before the launch plus
+ * every chunk's count, past the capacity when they overflowed. A void
+ * output gets no room and stays void. */
+SLUICE_INLINE_ void sluice_chain_(sluice_state_ *s, global uint *vars, global uint *chain,
+                                  const sluice_launch_ *L)
+{
+    uint t = s->chunk_id, st = L->stride, rows = 32u - clz(L->ordered_mask);
+    uint tag = L->epoch << 2;
+    volatile global uint *flag = chain + 1u;
+    volatile global uint *count = flag + st, *end = count + rows * st;
+    uint acc[SLUICE_MAX_OUTPUTS], dead = 0u;
+    SLUICE_EACH_OUTPUT_ (k) {
+        acc[k] = 0u;
+        if (!((L->ordered_mask >> k) & 1u))
+            continue;
+        uint v = vars[L->out_var[k]];
+        if (v == SLUICE_VOID_)
+            dead |= 1u << k;
+        else if (t == 0u)
+            acc[k] = v; /* the first chunk's place: the length before */
+        else
+            count[k * st + t] = s->cnt[k];
+    }
+    if (t != 0u) {
+        mem_fence(CLK_GLOBAL_MEM_FENCE);
+        atomic_xchg((global uint *)&flag[t], tag | SLUICE_CHAIN_COUNT_);
+        for (uint j = t - 1u;; --j) {
+            uint f;
+            while (((f = flag[j]) & ~3u) != tag)
+                ; /* chunk j's work-item has started and will publish */
+            mem_fence(CLK_GLOBAL_MEM_FENCE);
+            volatile global uint *v = (f & SLUICE_CHAIN_END_) ? end : count;
+            SLUICE_EACH_OUTPUT_ (k)
+                if ((L->ordered_mask >> k) & 1u)
+                    acc[k] += v[k * st + j];
+            if (f & SLUICE_CHAIN_END_)
+                break;
+        }
+    }
+    /* an overflowed input voids the outputs (sluice_set_lengths_) */
+    /* the next work-item's ticket (its predecessor in the group runs first) */
+    uint l = (uint)get_local_id(0);
+    if (l + 1u < min((uint)get_local_size(0), (uint)SLUICE_LDS_WORDS_)) {
+        uint next = sluice_chain_ticket_(chain);
+        s->lds[l + 1u] = next;
+        s->ahead = (next - t) * L->chunk;
+    } else {
+        s->ahead = 0u; /* not known */
+    }
+    uint last = t == (uint)get_global_size(0) - 1u &&
+                (L->n_fixed != SLUICE_NONE || vars[L->in_var] <= L->in_cap);
+    SLUICE_EACH_OUTPUT_ (k) {
+        if (!((L->ordered_mask >> k) & 1u))
+            continue;
+        uint e = acc[k] + s->cnt[k];
+        end[k * st + t] = e;
+        s->pos[k] = (dead >> k) & 1u ? 0u : acc[k];
+        s->lim[k] = (dead >> k) & 1u ? 0u : min(e, L->out_cap[k]);
+        if (last && !((dead >> k) & 1u))
+            vars[L->out_var[k]] = e;
+    }
+    mem_fence(CLK_GLOBAL_MEM_FENCE);
+    atomic_xchg((global uint *)&flag[t], tag | SLUICE_CHAIN_END_);
+}
+#endif
+
 /* The loop forms (sluice_begin_'s `form`): SLUICE_FOR_EACH, _RANGE, _BLOCK. */
 #define SLUICE_FORM_RECORD_ 0
 #define SLUICE_FORM_RANGE_ 1
@@ -387,7 +508,7 @@ SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
  * each run takes chunks from all over the stream and costs about its share
  * (bench/README.md, "Uneven records spread over the threads"). A chunk's
  * records, and the order of ordered outputs (by chunk), are as before. */
-SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global const uint *scratch,
+SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global uint *scratch,
                                   local uint *lds, const sluice_launch_ *L, int form, uint width)
 {
     uint n = L->n_fixed;
@@ -397,6 +518,12 @@ SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global co
             sluice_set_lengths_(vars, L, n);
     }
     uint id = (uint)get_global_id(0);
+#ifndef SLUICE_GROUP_EMIT_
+    if (L->mode == 3u) /* the chain's tickets, below */
+        id = get_local_id(0) == 0 || get_local_id(0) >= SLUICE_LDS_WORDS_
+                 ? sluice_chain_ticket_(scratch)
+                 : lds[get_local_id(0)];
+#endif
     if (L->spread > 1u) /* the spread, above */
         id = (uint)((ulong)get_group_id(0) * L->spread % get_num_groups(0)) *
                  (uint)get_local_size(0) +
@@ -421,6 +548,7 @@ SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global co
             s->step = s->blk = max(s->end - s->begin, 1u);
     }
     s->uend = s->end;
+    s->ahead = s->end - s->begin;
     s->pass = L->first_pass;
     s->lds = lds;
     s->group = 0u;
@@ -549,6 +677,10 @@ SLUICE_INLINE_ void sluice_next_(sluice_state_ *s, global uint *vars, global uin
     if (s->pass == 0 && s->group) {
         sluice_group_reserve_(s, vars, scratch, L);
     } else if (s->pass == 0) {
+#ifndef SLUICE_GROUP_EMIT_
+        if (L->mode == 3u)
+            sluice_chain_(s, vars, scratch, L);
+#endif
         SLUICE_EACH_OUTPUT_ (k) {
             if (!((L->out_mask >> k) & 1u))
                 continue;
@@ -1168,6 +1300,14 @@ SLUICE_INLINE_ void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf
     (sluice_L_.n_fixed != SLUICE_NONE                                                              \
          ? sluice_L_.n_fixed                                                                       \
          : sluice_stream_length_(sluice_vars_, sluice_L_.in_var, sluice_L_.in_cap))
+
+/* In the write pass of a range (SLUICE_FOR_EACH_RANGE), the records from
+ * this work-item's first to the first of the chunk that its thread (on a
+ * CPU) most likely takes next: a kernel that asks for that chunk's first
+ * lines while it writes keeps the memory bus busy (COMPACT_NEXT_ in
+ * compact.cl). Its own length, or in a chained launch (sluice_chain_) the
+ * distance to the chunk whose ticket it took; 0 when not known. */
+#define SLUICE_AHEAD (sluice_s_.ahead)
 
 /* Asks for the cache line holding global address `p` ahead of its use. A
  * hint: nothing happens where the

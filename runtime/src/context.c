@@ -171,6 +171,8 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
         opt.verbose = 1;
     if (env_on("SLUICE_NO_SPREAD"))
         opt.no_spread = 1;
+    if (env_on("SLUICE_NO_CHAIN"))
+        opt.no_chain = 1;
     if (!opt.build_options)
         opt.build_options = getenv("SLUICE_BUILD_OPTIONS");
     const char *chunk_env = getenv("SLUICE_CHUNK");
@@ -238,6 +240,7 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     }
     ctx->chunk = opt.chunk;
     ctx->no_spread = opt.no_spread;
+    ctx->no_chain = opt.no_chain;
     ctx->layout = opt.layout != SLUICE_LAYOUT_AUTO ? (int)opt.layout
                   : ctx->info.is_cpu               ? SLUICE_LAYOUT_CONTIGUOUS
                                                    : SLUICE_LAYOUT_INTERLEAVED;
@@ -337,7 +340,7 @@ sluice_status sluice_context_finish(sluice_context *ctx)
 
 size_t sluice_context_scratch_bytes(const sluice_context *ctx)
 {
-    return ctx ? ctx->scratch_bytes : 0;
+    return ctx ? ctx->scratch_bytes + ctx->chain_bytes : 0;
 }
 
 size_t sluice_context_sort_scratch_bytes(const sluice_context *ctx)
@@ -353,13 +356,14 @@ void sluice_context_release_scratch(sluice_context *ctx)
     if (!ctx)
         return;
     /* An in-order queue: work queued before keeps the buffers alive. */
-    cl_mem *ms[] = {&ctx->scratch, &ctx->sort_scratch[0], &ctx->sort_scratch[1]};
+    cl_mem *ms[] = {&ctx->scratch, &ctx->chain, &ctx->sort_scratch[0], &ctx->sort_scratch[1]};
     for (size_t i = 0; i < sizeof ms / sizeof *ms; ++i) {
         if (*ms[i])
             clReleaseMemObject(*ms[i]);
         *ms[i] = NULL;
     }
     ctx->scratch_bytes = 0;
+    ctx->chain_bytes = 0;
     ctx->sort_scratch_bytes = 0;
 }
 
@@ -420,20 +424,45 @@ sluice_status sl_vars_fill(sluice_context *ctx, cl_uint first, size_t count, cl_
     return err == CL_SUCCESS ? SLUICE_OK : sl_cl_fail(ctx, err, "setting device variables");
 }
 
-sluice_status sl_scratch_reserve(sluice_context *ctx, size_t bytes)
+/* Grows *buf (of *have bytes) to hold at least `bytes`, a new buffer of at
+ * least 4 KiB, zeroed when `zero`; `what` names it in errors. */
+static sluice_status grow_buffer(sluice_context *ctx, cl_mem *buf, size_t *have, size_t bytes,
+                                 int zero, const char *what)
 {
-    if (bytes <= ctx->scratch_bytes)
+    if (bytes <= *have)
         return SLUICE_OK;
     size_t want = bytes < 4096 ? 4096 : bytes;
     cl_int err;
     cl_mem m = clCreateBuffer(ctx->cl, CL_MEM_READ_WRITE, want, NULL, &err);
-    if (!m)
-        return sl_cl_fail(ctx, err, "allocating scratch for ordered outputs");
-    if (ctx->scratch)
-        clReleaseMemObject(ctx->scratch); /* in-order queue: pending users keep it alive */
-    ctx->scratch = m;
-    ctx->scratch_bytes = want;
+    if (m && zero) {
+        cl_uint z = 0;
+        err = clEnqueueFillBuffer(ctx->queue, m, &z, sizeof z, 0, want, 0, NULL, NULL);
+        if (err != CL_SUCCESS) {
+            clReleaseMemObject(m);
+            m = NULL;
+        }
+    }
+    if (!m) {
+        char msg[128];
+        snprintf(msg, sizeof msg, "allocating %s", what);
+        return sl_cl_fail(ctx, err, msg);
+    }
+    if (*buf)
+        clReleaseMemObject(*buf); /* in-order queue: pending users keep it alive */
+    *buf = m;
+    *have = want;
     return SLUICE_OK;
+}
+
+sluice_status sl_scratch_reserve(sluice_context *ctx, size_t bytes)
+{
+    return grow_buffer(ctx, &ctx->scratch, &ctx->scratch_bytes, bytes, 0,
+                       "scratch for ordered outputs");
+}
+
+sluice_status sl_chain_reserve(sluice_context *ctx, size_t bytes)
+{
+    return grow_buffer(ctx, &ctx->chain, &ctx->chain_bytes, bytes, 1, "the ordered outputs' chain");
 }
 
 sluice_status sl_sort_scratch(sluice_context *ctx, size_t bytes, int two, cl_mem out[2])

@@ -36,7 +36,7 @@ const char *sl_embedded_find(const char *name);
 /* Host mirror of sluice_launch_ in kernels/sluice.cl: same order, all cl_uint. */
 typedef struct sl_launch {
     cl_uint n_fixed, in_var, chunk, mode, first_pass, ordered_mask, out_mask;
-    cl_uint counter_var, n_counters, prof_var, stride, in_cap, n_map, interleave, spread;
+    cl_uint counter_var, n_counters, prof_var, stride, in_cap, n_map, interleave, spread, epoch;
     cl_uint out_var[SLUICE_MAX_OUTPUTS];
     cl_uint out_cap[SLUICE_MAX_OUTPUTS];
     cl_uint map_var[SLUICE_MAX_OUTPUTS];
@@ -78,12 +78,19 @@ struct sluice_context {
     int layout;
     size_t group;
     int no_spread; /* sluice_context_options.no_spread */
+    int no_chain;  /* sluice_context_options.no_chain */
     /* Variable pool. */
     cl_mem vars;
     unsigned char *var_used;
     /* Scratch for ordered outputs' per-chunk counts. */
     cl_mem scratch;
     size_t scratch_bytes;
+    /* The chain's ticket, flags and values: ordered outputs in one launch
+     * (kernels/sluice.cl, sluice_chain_), zeroed when made; and the epoch
+     * of the last launch that used it. */
+    cl_mem chain;
+    size_t chain_bytes;
+    cl_uint chain_epoch;
     /* The radix sort's ping-pong buffers for keys and values, each of
      * sort_scratch_bytes (sl_sort_scratch). */
     cl_mem sort_scratch[2];
@@ -243,6 +250,8 @@ sluice_status sl_vars_fill(sluice_context *ctx, cl_uint first, size_t count, cl_
 
 /* Makes sure the ordered-output scratch holds at least `bytes`. */
 sluice_status sl_scratch_reserve(sluice_context *ctx, size_t bytes);
+/* Makes sure the chain buffer holds at least `bytes`; a new one is zeroed. */
+sluice_status sl_chain_reserve(sluice_context *ctx, size_t bytes);
 /* The sort's two scratch buffers of at least `bytes` each (the second only
  * when `two`), grown as needed and kept by the context. */
 sluice_status sl_sort_scratch(sluice_context *ctx, size_t bytes, int two, cl_mem out[2]);

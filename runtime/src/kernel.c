@@ -308,6 +308,8 @@ static sluice_status set_hidden(sluice_kernel *k, const sl_launch *L)
 {
     sluice_context *ctx = k->ctx;
     cl_mem scratch = ctx->scratch ? ctx->scratch : ctx->vars; /* never read unless ordered */
+    if (L->mode == 3)
+        scratch = ctx->chain;
     cl_int err = clSetKernelArg(k->cl, 0, sizeof(cl_mem), &ctx->vars);
     if (err == CL_SUCCESS)
         err = clSetKernelArg(k->cl, 1, sizeof(cl_mem), &scratch);
@@ -457,7 +459,31 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 
     sluice_status st = SLUICE_OK;
     L.interleave = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
-    if (queued) {
+    /* Ordered outputs in one launch (the chain, kernels/sluice.cl): on PoCL's
+     * CPU devices (which run a group's work-items one after another, as the
+     * chain needs), in the contiguous layout, for kernels whose chunks cost
+     * about the same (a chunk waits for the one before it to be counted) */
+    const int chain = L.ordered_mask && ctx->info.is_cpu &&
+                      ctx->layout == SLUICE_LAYOUT_CONTIGUOUS && !k->uneven && !ctx->no_chain &&
+                      strstr(ctx->info.platform, "Portable Computing Language") != NULL;
+    if (queued && chain) {
+        size_t rows = 0; /* rows up to the highest ordered slot */
+        for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
+            if ((L.ordered_mask >> s) & 1u)
+                rows = s + 1;
+        st = sl_chain_reserve(ctx, (1 + (1 + 2 * rows) * L.stride) * sizeof(cl_uint));
+        if (st != SLUICE_OK)
+            return st;
+        ctx->chain_epoch = ctx->chain_epoch + 1 < (1u << 30) ? ctx->chain_epoch + 1 : 1;
+        L.epoch = ctx->chain_epoch;
+        L.mode = 3;
+        L.first_pass = 0;
+        st = set_hidden(k, &L);
+        if (st == SLUICE_OK)
+            st = enqueue(k, global, 0);
+        if (st != SLUICE_OK)
+            return st;
+    } else if (queued) {
         if (L.ordered_mask) {
             size_t rows = 0; /* rows up to the highest ordered slot */
             for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)

@@ -161,6 +161,13 @@ typedef struct sluice_context_options {
      *  (sluice_kernel_set_uneven), e.g. to measure what the spread gives.
      *  Also set by SLUICE_NO_SPREAD=1. */
     int no_spread;
+    /** Non-zero: ordered outputs always take a count launch, a scan and a
+     *  write launch. Otherwise, on CPU devices in the contiguous layout,
+     *  launches of kernels not marked uneven place them in one launch, each
+     *  chunk taking its places from the chunks before it (SLUICE_ORDERED),
+     *  which reads the input once instead of twice. For measuring; also set
+     *  by SLUICE_NO_CHAIN=1. */
+    int no_chain;
 } sluice_context_options;
 
 typedef struct sluice_context sluice_context;
@@ -190,7 +197,8 @@ sluice_status sluice_context_device(const sluice_context *ctx, sluice_device_inf
 sluice_status sluice_context_finish(sluice_context *ctx);
 
 /** Bytes of device scratch the context holds for ordered outputs (the
- *  per-chunk counts); it grows to the largest launch and is kept. */
+ *  per-chunk counts, and on CPUs the chain's flags and counts); it grows to
+ *  the largest launch and is kept. */
 size_t sluice_context_scratch_bytes(const sluice_context *ctx);
 
 /** Bytes of device scratch the context holds for the radix sort (records to
@@ -361,7 +369,11 @@ typedef struct sluice_counters sluice_counters;
 /** How a conditional output stream receives records. */
 typedef enum sluice_output_mode {
     /** Records keep the order of the input records that emitted them. Costs a
-     *  counting launch and a small scan before the writing launch. */
+     *  counting launch and a small scan before the writing launch; on CPUs
+     *  (the contiguous layout), for kernels not marked uneven
+     *  (sluice_kernel_set_uneven), one launch whose chunks take their places
+     *  in turn, each from the ones before it (decoupled look-back: a chunk
+     *  waits only for the counts of chunks already started). */
     SLUICE_ORDERED = 0,
     /** Each chunk of input appends its records with one global atomic; order
      *  within a chunk is kept, order between chunks is not. */
