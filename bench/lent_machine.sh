@@ -45,6 +45,10 @@
 #   overhead=LIST bench_streams on 2^18 records on PoCL at each thread count
 #                 of LIST: what a dependent launch, a launch and the wait
 #                 for it, and a frame's round trip cost -> overhead-N.json
+#   chain-ab=LIST bench_streams_ab on PoCL at each thread count of LIST:
+#                 ordered outputs by three commands against the chain (one
+#                 launch, decoupled look-back), which waits more with more
+#                 threads -> chain-ab-N.txt
 #   rt-profile=LIST  bench_raytrace (bunny, bunny-close) on PoCL at each
 #                 thread count of LIST with SLUICE_PROFILE=1: the kernels'
 #                 own times against the frames' -> rt-profile-N.txt
@@ -309,6 +313,14 @@ for phase in "$@"; do
             POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t limited 60 taskset -c 0-$((t - 1)) \
                 build/bench/bench_streams --n 262144 --reps 5 --skip-bitonic \
                 --out "$OUT/overhead-$t.json" | grep -E "device:|chain|wait"
+        done
+        ;;
+    chain-ab=*)
+        for t in $(echo "${phase#chain-ab=}" | tr , ' '); do
+            say "ordered outputs, three commands against the chain, on PoCL, $t threads"
+            POCL_MAX_PTHREAD_COUNT=$t POCL_CPU_MAX_CU_COUNT=$t limited 90 taskset -c 0-$((t - 1)) \
+                build/bench/bench_streams_ab --pairs 20 >"$OUT/chain-ab-$t.txt" 2>&1
+            cat "$OUT/chain-ab-$t.txt"
         done
         ;;
     rt-profile=*)
