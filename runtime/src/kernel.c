@@ -8,6 +8,8 @@
 /* Hidden parameters before the user's: variable pool, scratch, launch info,
  * local memory for group emission (kernels/sluice.cl). */
 #define SL_HIDDEN_ARGS 4u
+/* The shortest chunk of a chained launch (launch, below). */
+#define SL_CHAIN_MIN_CHUNK 1024u
 #define SL_LDS_WORDS (3u * SLUICE_MAX_OUTPUTS) /* SLUICE_LDS_WORDS_ */
 
 sluice_status sluice_kernel_create(sluice_program *program, const char *name, sluice_kernel **out)
@@ -433,7 +435,20 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         else
             any_unordered = 1;
     }
+    /* Ordered outputs in one launch (the chain, kernels/sluice.cl): on PoCL's
+     * CPU devices (which run a group's work-items one after another, as the
+     * chain needs), in the contiguous layout, for kernels whose chunks cost
+     * about the same (a chunk waits for the one before it to be counted) */
+    const int chain = L.ordered_mask && ctx->info.is_cpu &&
+                      ctx->layout == SLUICE_LAYOUT_CONTIGUOUS && !k->uneven && !ctx->no_chain &&
+                      strstr(ctx->info.platform, "Portable Computing Language") != NULL;
     size_t chunk = choose_chunk(ctx, bound);
+    /* A chained chunk costs a few cross-core reads and writes: at 16 to 64
+     * records the chain was slower than the three commands, from 256 on
+     * faster (bench/README.md), so its chunks are never shorter than that
+     * unless SLUICE_CHUNK says so. */
+    if (chain && !ctx->chunk && chunk < SL_CHAIN_MIN_CHUNK)
+        chunk = SL_CHAIN_MIN_CHUNK;
     size_t chunks = (bound + chunk - 1) / chunk;
     size_t global = sl_round_up(chunks ? chunks : 1, k->group);
     L.chunk = (cl_uint)chunk;
@@ -459,13 +474,6 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 
     sluice_status st = SLUICE_OK;
     L.interleave = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
-    /* Ordered outputs in one launch (the chain, kernels/sluice.cl): on PoCL's
-     * CPU devices (which run a group's work-items one after another, as the
-     * chain needs), in the contiguous layout, for kernels whose chunks cost
-     * about the same (a chunk waits for the one before it to be counted) */
-    const int chain = L.ordered_mask && ctx->info.is_cpu &&
-                      ctx->layout == SLUICE_LAYOUT_CONTIGUOUS && !k->uneven && !ctx->no_chain &&
-                      strstr(ctx->info.platform, "Portable Computing Language") != NULL;
     if (queued && chain) {
         size_t rows = 0; /* rows up to the highest ordered slot */
         for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
