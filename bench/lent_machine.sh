@@ -28,6 +28,10 @@
 #                 one ray per work-item (the default there) and in blocks of
 #                 16 rays (-DRT_NO_PER_RAY), in turn, R rounds
 #                 -> rt-per-ray-{on,off}-N.json
+#   gpu-chain-ab  bench_streams_ab on the GPU with SLUICE_GROUP_CHAIN=1:
+#                 ordered outputs by three commands against the groups'
+#                 chain -> chain-ab-gpu.txt (gpu-tests=..._gpu_chain runs
+#                 the stream tests that way)
 #   gpu-contig    the same in the CPU's layout -> streams-h100-contiguous.json
 #   gpu-chunks=LIST  the same in its own layout with SLUICE_CHUNK (records
 #                 per work-item) at each value of LIST -> streams-h100-chunk-N.json
@@ -246,6 +250,15 @@ for phase in "$@"; do
         gpu_ab "${phase#gpu-rt-ab=}" -DRT_NO_PER_RAY rt-per-ray 150 \
             "^(cornell|bunny|bunny-close) +[0-9]+ +[0-9]" \
             build/bench/bench_raytrace --skip-purcell --reps 2
+        ;;
+    gpu-chain-ab)
+        # ordered outputs: count launch, scan and write launch against each
+        # group placing its tile by the chain (SLUICE_GROUP_CHAIN=1), pairs
+        # of calls; then the GPU's stream tests with the chain on
+        say "bench_streams_ab on the GPU, SLUICE_GROUP_CHAIN=1"
+        SLUICE_DEVICE=$DEV SLUICE_GROUP_CHAIN=1 limited 90 build/bench/bench_streams_ab \
+            --pairs 20 >"$OUT/chain-ab-gpu.txt" 2>&1
+        cat "$OUT/chain-ab-gpu.txt"
         ;;
     gpu-contig)
         say "bench_streams on the GPU, SLUICE_LAYOUT=contiguous"

@@ -392,26 +392,32 @@ SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
 #define SLUICE_CHAIN_COUNT_ 1u
 #define SLUICE_CHAIN_END_ 2u
 
-#ifndef SLUICE_GROUP_EMIT_
-/* A chunk number of a mode-3 launch. */
-SLUICE_INLINE_ uint sluice_chain_ticket_(global uint *chain)
+/* A chunk number of a mode-3 launch whose chunks number `total`: the
+ * order in which they are taken (a group's, in the interleaved layout). */
+SLUICE_INLINE_ uint sluice_chain_ticket_(global uint *chain, uint total)
 {
     uint t = atomic_inc(chain);
-    if (t == (uint)get_global_size(0) - 1u) /* every ticket is taken */
+    if (t == total - 1u) /* every ticket is taken */
         atomic_xchg(chain, 0u);
     return t;
 }
 
-/* After a mode-3 chunk's count pass: the places of its ordered outputs'
- * records (pos, lim), from the counts and ends of the chunks before it, and
- * its own published. The last chunk sets the outputs' lengths (the scan
- * kernel's job in modes 1 and 2): their length before the launch plus
- * every chunk's count, past the capacity when they overflowed. A void
- * output gets no room and stays void. */
-SLUICE_INLINE_ void sluice_chain_(sluice_state_ *s, global uint *vars, global uint *chain,
-                                  const sluice_launch_ *L)
+/* Chunk t of a mode-3 launch (of chunks 0 .. last), once counted (cnt, per
+ * output): the places of its ordered outputs' records (pos, lim), from the
+ * counts and ends of the chunks before it, and its own published. The last
+ * chunk sets the outputs' lengths (the scan kernel's job in modes 1 and 2):
+ * their length before the launch plus every chunk's count, past the
+ * capacity when they overflowed. A void output gets no room and stays void.
+ * In the interleaved layout a chunk is a work-group's tile, and its first
+ * work-item runs this for the group (programs built with
+ * -DSLUICE_GROUP_CHAIN_, which the host adds for SLUICE_GROUP_CHAIN=1: the
+ * look-back between group emission's barriers made PoCL's compile of those
+ * programs several times longer, so only the contexts that chain have it). */
+SLUICE_INLINE_ void sluice_chain_place_(global uint *chain, global uint *vars,
+                                        const sluice_launch_ *L, uint t, uint last,
+                                        const uint *cnt, uint *pos, uint *lim)
 {
-    uint t = s->chunk_id, st = L->stride, rows = 32u - clz(L->ordered_mask);
+    uint st = L->stride, rows = 32u - clz(L->ordered_mask);
     uint tag = L->epoch << 2;
     volatile global uint *flag = chain + 1u;
     volatile global uint *count = flag + st, *end = count + rows * st;
@@ -426,7 +432,7 @@ SLUICE_INLINE_ void sluice_chain_(sluice_state_ *s, global uint *vars, global ui
         else if (t == 0u)
             acc[k] = v; /* the first chunk's place: the length before */
         else
-            count[k * st + t] = s->cnt[k];
+            count[k * st + t] = cnt[k];
     }
     if (t != 0u) {
         mem_fence(CLK_GLOBAL_MEM_FENCE);
@@ -444,30 +450,39 @@ SLUICE_INLINE_ void sluice_chain_(sluice_state_ *s, global uint *vars, global ui
                 break;
         }
     }
-    /* an overflowed input voids the outputs (sluice_set_lengths_) */
-    /* the next work-item's ticket (its predecessor in the group runs first) */
+    /* an overflowed input voids the outputs instead (sluice_set_lengths_) */
+    uint fin = t == last && (L->n_fixed != SLUICE_NONE || vars[L->in_var] <= L->in_cap);
+    SLUICE_EACH_OUTPUT_ (k) {
+        if (!((L->ordered_mask >> k) & 1u))
+            continue;
+        uint e = acc[k] + cnt[k];
+        end[k * st + t] = e;
+        pos[k] = (dead >> k) & 1u ? 0u : acc[k];
+        lim[k] = (dead >> k) & 1u ? 0u : min(e, L->out_cap[k]);
+        if (fin && !((dead >> k) & 1u))
+            vars[L->out_var[k]] = e;
+    }
+    mem_fence(CLK_GLOBAL_MEM_FENCE);
+    atomic_xchg((global uint *)&flag[t], tag | SLUICE_CHAIN_END_);
+}
+
+#ifndef SLUICE_GROUP_EMIT_
+/* The contiguous layout's chain, after a chunk's count pass: its places,
+ * then the ticket of the next work-item of the group (which runs after this
+ * one) and how far ahead its chunk lies. */
+SLUICE_INLINE_ void sluice_chain_(sluice_state_ *s, global uint *vars, global uint *chain,
+                                  const sluice_launch_ *L)
+{
+    uint t = s->chunk_id, total = (uint)get_global_size(0);
+    sluice_chain_place_(chain, vars, L, t, total - 1u, s->cnt, s->pos, s->lim);
     uint l = (uint)get_local_id(0);
     if (l + 1u < min((uint)get_local_size(0), (uint)SLUICE_LDS_WORDS_)) {
-        uint next = sluice_chain_ticket_(chain);
+        uint next = sluice_chain_ticket_(chain, total);
         s->lds[l + 1u] = next;
         s->ahead = (next - t) * L->chunk;
     } else {
         s->ahead = 0u; /* not known */
     }
-    uint last = t == (uint)get_global_size(0) - 1u &&
-                (L->n_fixed != SLUICE_NONE || vars[L->in_var] <= L->in_cap);
-    SLUICE_EACH_OUTPUT_ (k) {
-        if (!((L->ordered_mask >> k) & 1u))
-            continue;
-        uint e = acc[k] + s->cnt[k];
-        end[k * st + t] = e;
-        s->pos[k] = (dead >> k) & 1u ? 0u : acc[k];
-        s->lim[k] = (dead >> k) & 1u ? 0u : min(e, L->out_cap[k]);
-        if (last && !((dead >> k) & 1u))
-            vars[L->out_var[k]] = e;
-    }
-    mem_fence(CLK_GLOBAL_MEM_FENCE);
-    atomic_xchg((global uint *)&flag[t], tag | SLUICE_CHAIN_END_);
 }
 #endif
 
@@ -485,6 +500,34 @@ SLUICE_INLINE_ void sluice_chain_(sluice_state_ *s, global uint *vars, global ui
  * from its first. */
 #define SLUICE_LANE16                                                                              \
     ((uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u))
+
+/* The records of the work-item whose chunk (or whose group's tile) is
+ * that of work-item `id` (sluice_begin_, below). */
+SLUICE_INLINE_ void sluice_records_(sluice_state_ *s, uint id, uint n, const sluice_launch_ *L,
+                                    int form, uint width)
+{
+    s->chunk_id = id;
+    const int inter = L->interleave && form != SLUICE_FORM_RANGE_;
+    if (inter) {
+        uint l = (uint)get_local_id(0), g = (uint)get_local_size(0);
+        uint w = form == SLUICE_FORM_BLOCK_ ? width : 1u;
+        ulong tile = (ulong)(id - l) * L->chunk;
+        s->begin = (uint)min(tile + (ulong)w * l, (ulong)n);
+        s->end = (uint)min(tile + (ulong)g * L->chunk, (ulong)n);
+        s->step = w * g;
+        s->blk = w;
+    } else {
+        ulong b = (ulong)id * L->chunk;
+        s->begin = (uint)min(b, (ulong)n);
+        s->end = (uint)min(b + L->chunk, (ulong)n);
+        s->step = 1u;
+        s->blk = 1u;
+        if (form == SLUICE_FORM_BLOCK_) /* one block: the whole chunk */
+            s->step = s->blk = max(s->end - s->begin, 1u);
+    }
+    s->uend = s->end;
+    s->ahead = s->end - s->begin;
+}
 
 /* The records of this work-item. Contiguous chunks (the range form, or a
  * launch without `interleave`): work-item i takes [i chunk, (i + 1) chunk),
@@ -521,34 +564,14 @@ SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global ui
 #ifndef SLUICE_GROUP_EMIT_
     if (L->mode == 3u) /* the chain's tickets, below */
         id = get_local_id(0) == 0 || get_local_id(0) >= SLUICE_LDS_WORDS_
-                 ? sluice_chain_ticket_(scratch)
+                 ? sluice_chain_ticket_(scratch, (uint)get_global_size(0))
                  : lds[get_local_id(0)];
 #endif
     if (L->spread > 1u) /* the spread, above */
         id = (uint)((ulong)get_group_id(0) * L->spread % get_num_groups(0)) *
                  (uint)get_local_size(0) +
              (uint)get_local_id(0);
-    s->chunk_id = id;
-    const int inter = L->interleave && form != SLUICE_FORM_RANGE_;
-    if (inter) {
-        uint l = (uint)get_local_id(0), g = (uint)get_local_size(0);
-        uint w = form == SLUICE_FORM_BLOCK_ ? width : 1u;
-        ulong tile = (ulong)(id - l) * L->chunk;
-        s->begin = (uint)min(tile + (ulong)w * l, (ulong)n);
-        s->end = (uint)min(tile + (ulong)g * L->chunk, (ulong)n);
-        s->step = w * g;
-        s->blk = w;
-    } else {
-        ulong b = (ulong)id * L->chunk;
-        s->begin = (uint)min(b, (ulong)n);
-        s->end = (uint)min(b + L->chunk, (ulong)n);
-        s->step = 1u;
-        s->blk = 1u;
-        if (form == SLUICE_FORM_BLOCK_) /* one block: the whole chunk */
-            s->step = s->blk = max(s->end - s->begin, 1u);
-    }
-    s->uend = s->end;
-    s->ahead = s->end - s->begin;
+    sluice_records_(s, id, n, L, form, width);
     s->pass = L->first_pass;
     s->lds = lds;
     s->group = 0u;
@@ -560,6 +583,42 @@ SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global ui
 #ifdef SLUICE_GROUP_EMIT_
     /* The interleaved layout with outputs: the same for the whole launch,
      * so the whole group takes the barriers or none does. */
+#ifdef SLUICE_GROUP_CHAIN_
+    /* with the groups' chain (mode 3): the group's ticket first, and its
+     * tile from it */
+    if (L->interleave && L->out_mask != 0u) {
+        s->group = 1u;
+        row = (uint)get_group_id(0);
+        if (L->mode >= 2u) {
+            s->omask = L->ordered_mask;
+            s->stepped = form != SLUICE_FORM_RANGE_;
+        }
+        if (get_local_id(0) == 0) {
+            SLUICE_EACH_OUTPUT_ (k) {
+                lds[k] = 0u;
+                if (L->mode == 2u && ((s->omask >> k) & 1u)) /* the group's next place */
+                    lds[SLUICE_MAX_OUTPUTS + k] = scratch[k * L->stride + row];
+            }
+            /* the group chain's ticket (the chain, above; in the scan's
+             * words, read by all before any scan) */
+            if (L->mode == 3u)
+                lds[SLUICE_LDS_WORDS_] = sluice_chain_ticket_(scratch, (uint)get_num_groups(0));
+        }
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (L->mode == 3u) { /* the tile of the ticket's number */
+            row = lds[SLUICE_LDS_WORDS_];
+            sluice_records_(s, row * (uint)get_local_size(0) + (uint)get_local_id(0), n, L, form,
+                            width);
+        }
+        if (s->stepped) {
+            /* every work-item of the group takes the same number of steps */
+            uint steps = (L->chunk + s->blk - 1u) / s->blk;
+            s->uend = (uint)min((ulong)s->begin + (ulong)steps * s->step, (ulong)0xffffffffu);
+            /* nothing to reserve: no count pass (the chain counts first) */
+            if (L->mode == 2u && !(L->out_mask & ~L->ordered_mask))
+                s->pass = 1u;
+        }
+#else
     if (L->interleave && L->out_mask != 0u) {
         s->group = 1u;
         row = (uint)get_group_id(0);
@@ -581,6 +640,7 @@ SLUICE_INLINE_ void sluice_begin_(sluice_state_ *s, global uint *vars, global ui
                     lds[SLUICE_MAX_OUTPUTS + k] = scratch[k * L->stride + row];
             }
         barrier(CLK_LOCAL_MEM_FENCE);
+#endif
     }
 #endif
     SLUICE_EACH_OUTPUT_ (k) {
@@ -630,14 +690,38 @@ SLUICE_INLINE_ void sluice_group_reserve_(sluice_state_ *s, global uint *vars, g
     local uint *lds = s->lds;
     /* the counts this adds up: a count launch's ordered outputs, or the
      * unordered outputs room is reserved for */
+#ifdef SLUICE_GROUP_CHAIN_
+    const uint mine = L->mode == 1u   ? L->ordered_mask
+                      : L->mode == 3u ? L->out_mask
+                                      : L->out_mask & ~s->omask;
+    const uint chained = L->mode == 3u ? L->ordered_mask : 0u; /* placed by the chain */
+#else
     const uint mine = L->mode == 1u ? L->ordered_mask : L->out_mask & ~s->omask;
+    const uint chained = 0u;
+#endif
     SLUICE_EACH_OUTPUT_ (k)
         if (((mine >> k) & 1u) && s->cnt[k])
             atomic_add(&lds[k], s->cnt[k]);
     barrier(CLK_LOCAL_MEM_FENCE);
     if (get_local_id(0) == 0) {
+#ifdef SLUICE_GROUP_CHAIN_
+        if (L->mode == 3u) { /* the group's places of its ordered outputs: the chain */
+            uint tot[SLUICE_MAX_OUTPUTS], pos[SLUICE_MAX_OUTPUTS], lim[SLUICE_MAX_OUTPUTS];
+            SLUICE_EACH_OUTPUT_ (k)
+                tot[k] = lds[k];
+            sluice_chain_place_(scratch, vars, L, s->chunk_id / (uint)get_local_size(0),
+                                (uint)get_num_groups(0) - 1u, tot, pos, lim);
+            SLUICE_EACH_OUTPUT_ (k) {
+                if (!((L->ordered_mask >> k) & 1u))
+                    continue;
+                lds[SLUICE_MAX_OUTPUTS + k] = pos[k];
+                lds[2 * SLUICE_MAX_OUTPUTS + k] = lim[k];
+                lds[k] = 0u;
+            }
+        }
+#endif
         SLUICE_EACH_OUTPUT_ (k) {
-            if (!((mine >> k) & 1u))
+            if (!(((mine & ~chained) >> k) & 1u))
                 continue;
             if (L->mode == 1u) {
                 scratch[k * L->stride + get_group_id(0)] = lds[k];
@@ -660,7 +744,11 @@ SLUICE_INLINE_ void sluice_group_reserve_(sluice_state_ *s, global uint *vars, g
     }
     /* taken by every work-item in a write launch (no barrier under a
      * condition on the form); a stepping group's places come per step */
+#ifdef SLUICE_GROUP_CHAIN_
+    if (L->mode >= 2u)
+#else
     if (L->mode == 2u)
+#endif
         sluice_range_places_(s);
 #else
     (void)s;

@@ -1204,8 +1204,11 @@ static void test_profile(void)
      * (sluice_context_options.no_chain) */
     sluice_device_info info;
     CHECK_OK(ctx, sluice_context_device(ctx, &info));
-    const char *layout = getenv("SLUICE_LAYOUT"), *no_chain = getenv("SLUICE_NO_CHAIN");
-    int chained = info.is_cpu && !(layout && strcmp(layout, "interleaved") == 0) &&
+    const char *layout = getenv("SLUICE_LAYOUT"), *no_chain = getenv("SLUICE_NO_CHAIN"),
+               *groups = getenv("SLUICE_GROUP_CHAIN");
+    int interleaved = layout ? strcmp(layout, "interleaved") == 0 : !info.is_cpu;
+    int chained = (interleaved ? groups && *groups && strcmp(groups, "0") != 0
+                               : info.is_cpu && strstr(info.platform, "Portable") != NULL) &&
                   !(no_chain && *no_chain && strcmp(no_chain, "0") != 0);
     test_profile_rows(ctx, p, chained);
     sluice_program_destroy(p);

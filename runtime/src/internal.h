@@ -77,8 +77,9 @@ struct sluice_context {
      * SLUICE_LAYOUT_AUTO) and the work-group size they use. */
     int layout;
     size_t group;
-    int no_spread; /* sluice_context_options.no_spread */
-    int no_chain;  /* sluice_context_options.no_chain */
+    int no_spread;   /* sluice_context_options.no_spread */
+    int no_chain;    /* sluice_context_options.no_chain */
+    int group_chain; /* SLUICE_GROUP_CHAIN=1: chained launches in the interleaved layout too */
     /* Variable pool. */
     cl_mem vars;
     unsigned char *var_used;

@@ -435,19 +435,25 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         else
             any_unordered = 1;
     }
-    /* Ordered outputs in one launch (the chain, kernels/sluice.cl): on PoCL's
-     * CPU devices (which run a group's work-items one after another, as the
-     * chain needs), in the contiguous layout, for kernels whose chunks cost
-     * about the same (a chunk waits for the one before it to be counted) */
-    const int chain = L.ordered_mask && ctx->info.is_cpu &&
-                      ctx->layout == SLUICE_LAYOUT_CONTIGUOUS && !k->uneven && !ctx->no_chain &&
-                      strstr(ctx->info.platform, "Portable Computing Language") != NULL;
+    /* Ordered outputs in one launch (the chain, kernels/sluice.cl), for
+     * kernels whose chunks cost about the same (a chunk waits for the one
+     * before it to be counted): on PoCL's CPU devices (which run a group's
+     * work-items one after another, as the chain needs) in the contiguous
+     * layout; in the interleaved layout (GPUs), where a group's first
+     * work-item places the group's tile, only with SLUICE_GROUP_CHAIN=1 until
+     * it is measured on a GPU. */
+    const int contiguous = ctx->layout == SLUICE_LAYOUT_CONTIGUOUS;
+    const int chain =
+        L.ordered_mask && !k->uneven && !ctx->no_chain &&
+        (contiguous
+             ? ctx->info.is_cpu && strstr(ctx->info.platform, "Portable Computing Language") != NULL
+             : ctx->group_chain);
     size_t chunk = choose_chunk(ctx, bound);
     /* A chained chunk costs a few cross-core reads and writes: at 16 to 64
      * records the chain was slower than the three commands, from 256 on
      * faster (bench/README.md), so its chunks are never shorter than that
-     * unless SLUICE_CHUNK says so. */
-    if (chain && !ctx->chunk && chunk < SL_CHAIN_MIN_CHUNK)
+     * on CPUs unless SLUICE_CHUNK says so. */
+    if (chain && contiguous && !ctx->chunk && chunk < SL_CHAIN_MIN_CHUNK)
         chunk = SL_CHAIN_MIN_CHUNK;
     size_t chunks = (bound + chunk - 1) / chunk;
     size_t global = sl_round_up(chunks ? chunks : 1, k->group);

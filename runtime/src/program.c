@@ -264,10 +264,13 @@ sluice_status sluice_program_build(sluice_program *p)
     if (!opts)
         return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
     /* the interleaved layout's stream kernels reserve room per work-group
-     * (group emission, kernels/sluice.cl); off CPUs the loops over a
+     * (group emission, kernels/sluice.cl), and with SLUICE_GROUP_CHAIN=1
+     * place ordered outputs by the groups' chain; off CPUs the loops over a
      * work-item's outputs are unrolled, to keep its state in registers */
-    snprintf(opts, ol, "-cl-std=CL1.2%s%s%s %s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "",
+    snprintf(opts, ol, "-cl-std=CL1.2%s%s%s%s %s %s", ctx->no_simd ? " -DSLUICE_NO_SIMD" : "",
              ctx->layout == SLUICE_LAYOUT_INTERLEAVED ? " -DSLUICE_GROUP_EMIT_" : "",
+             ctx->layout == SLUICE_LAYOUT_INTERLEAVED && ctx->group_chain ? " -DSLUICE_GROUP_CHAIN_"
+                                                                          : "",
              ctx->info.is_cpu ? "" : " -DSLUICE_UNROLL_STATE_", p->options, ctx->build_options);
     /* built before in this context: taken as it is (verbose builds compile
      * again, so that the compiler's own output shows) */

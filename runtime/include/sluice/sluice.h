@@ -166,7 +166,9 @@ typedef struct sluice_context_options {
      *  launches of kernels not marked uneven place them in one launch, each
      *  chunk taking its places from the chunks before it (SLUICE_ORDERED),
      *  which reads the input once instead of twice. For measuring; also set
-     *  by SLUICE_NO_CHAIN=1. */
+     *  by SLUICE_NO_CHAIN=1. (SLUICE_GROUP_CHAIN=1 chains launches in the
+     *  interleaved layout too, each work-group placing its tile: for
+     *  measuring on GPUs.) */
     int no_chain;
 } sluice_context_options;
 
