@@ -8,8 +8,8 @@
 /* Hidden parameters before the user's: variable pool, scratch, launch info,
  * local memory for group emission (kernels/sluice.cl). */
 #define SL_HIDDEN_ARGS 4u
-/* The shortest chunk of a chained launch (launch, below). */
-#define SL_CHAIN_MIN_CHUNK 1024u
+/* The chunk a chained launch aims at (launch, below). */
+#define SL_CHAIN_CHUNK 1024u
 #define SL_LDS_WORDS (3u * SLUICE_MAX_OUTPUTS) /* SLUICE_LDS_WORDS_ */
 
 sluice_status sluice_kernel_create(sluice_program *program, const char *name, sluice_kernel **out)
@@ -443,18 +443,27 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
      * work-item places the group's tile, only with SLUICE_GROUP_CHAIN=1 until
      * it is measured on a GPU. */
     const int contiguous = ctx->layout == SLUICE_LAYOUT_CONTIGUOUS;
-    const int chain =
-        L.ordered_mask && !k->uneven && !ctx->no_chain &&
-        (contiguous
-             ? ctx->info.is_cpu && strstr(ctx->info.platform, "Portable Computing Language") != NULL
-             : ctx->group_chain);
+    int chain = L.ordered_mask && !k->uneven && !ctx->no_chain &&
+                (contiguous ? ctx->info.is_cpu &&
+                                  strstr(ctx->info.platform, "Portable Computing Language") != NULL
+                            : ctx->group_chain);
     size_t chunk = choose_chunk(ctx, bound);
-    /* A chained chunk costs a few cross-core reads and writes: at 16 to 64
-     * records the chain was slower than the three commands, from 256 on
-     * faster (bench/README.md), so its chunks are never shorter than that
-     * on CPUs unless SLUICE_CHUNK says so. */
-    if (chain && contiguous && !ctx->chunk && chunk < SL_CHAIN_MIN_CHUNK)
-        chunk = SL_CHAIN_MIN_CHUNK;
+    if (chain && contiguous && !ctx->chunk) {
+        /* A chained chunk costs a few cross-core reads and writes: at 16 to
+         * 64 records the chain was slower than the three commands, from 256
+         * on faster, so its chunks grow to 1024 records, as far as every
+         * thread keeps 4 work-groups (PoCL's unit of work: with fewer, one
+         * thread took most of a photon stream); a launch too small for
+         * chunks of 256 so shared takes the three commands
+         * (bench/README.md). SLUICE_CHUNK keeps its own. */
+        size_t cu = ctx->info.compute_units ? ctx->info.compute_units : 1;
+        size_t most = bound / (k->group * 4 * cu) & ~(size_t)15;
+        size_t want = most < SL_CHAIN_CHUNK ? most : SL_CHAIN_CHUNK;
+        if (want > chunk)
+            chunk = want;
+        if (chunk < SL_CHAIN_CHUNK / 4)
+            chain = 0;
+    }
     size_t chunks = (bound + chunk - 1) / chunk;
     size_t global = sl_round_up(chunks ? chunks : 1, k->group);
     L.chunk = (cl_uint)chunk;
