@@ -161,9 +161,9 @@ typedef struct sluice_state_ {
     uint omask;      /* ordered outputs placed by the group (group order), else 0 */
     uint stepped;    /* 1: their places come from a scan per step (not a range's) */
     uint chunk_id;
-    uint ahead; /* records from this chunk to the next this thread takes (SLUICE_AHEAD) */
-    uint group;                   /* 1: the group reserves room together (group emission) */
-    local uint *lds;              /* its cursors, starts and ends (SLUICE_LDS_WORDS_) */
+    uint ahead;      /* records from this chunk to the next this thread takes (SLUICE_AHEAD) */
+    uint group;      /* 1: the group reserves room together (group emission) */
+    local uint *lds; /* its cursors, starts and ends (SLUICE_LDS_WORDS_) */
     uint cnt[SLUICE_MAX_OUTPUTS]; /* records this chunk emits, per output */
     uint pos[SLUICE_MAX_OUTPUTS]; /* next slot to write; the group's start in group emission */
     uint lim[SLUICE_MAX_OUTPUTS]; /* end of the reserved range, clamped to capacity */
@@ -414,8 +414,8 @@ SLUICE_INLINE_ uint sluice_chain_ticket_(global uint *chain, uint total)
  * look-back between group emission's barriers made PoCL's compile of those
  * programs several times longer, so only the contexts that chain have it). */
 SLUICE_INLINE_ void sluice_chain_place_(global uint *chain, global uint *vars,
-                                        const sluice_launch_ *L, uint t, uint last,
-                                        const uint *cnt, uint *pos, uint *lim)
+                                        const sluice_launch_ *L, uint t, uint last, const uint *cnt,
+                                        uint *pos, uint *lim)
 {
     uint st = L->stride, rows = 32u - clz(L->ordered_mask);
     uint tag = L->epoch << 2;
