@@ -15,7 +15,7 @@
  *
  *   bench_knn_ab [--photons N] [--queries N] [--k K]
  *                [--mode atleast|exact|radius] [--grid XxYxZ | --hashed]
- *                [--pairs N] [--a OPTIONS] [--b OPTIONS]
+ *                [--shells-per-pass N|all] [--pairs N] [--a OPTIONS] [--b OPTIONS]
  *
  * --hashed runs the radius search over the hashed grid (Purcell 6.4.4,
  * sr_point_hash_desc_auto for the maximum radius), as the progressive
@@ -56,6 +56,9 @@ static void usage(FILE *out)
             "                     radius)\n"
             "  --grid XxYxZ       the grid's cells (default: sr_point_grid_desc_auto's for the\n"
             "                     mean k-photon radius)\n"
+            "  --shells-per-pass N|all\n"
+            "                     kNN shells each pass explores (default 1, Purcell's;\n"
+            "                     all: one pass, as sluice-photonmap --shells-per-pass all)\n"
             "  --pairs N          timed call pairs, after 2 warm-up pairs (default 20)\n"
             "  --a OPTIONS        build options appended for variant A (default none)\n"
             "  --b OPTIONS        build options appended for variant B (default none)\n"
@@ -165,7 +168,7 @@ static long count_diff(variant *v, size_t nq, double *mean)
 
 int main(int argc, char **argv)
 {
-    unsigned np = 65000, nq = 262144, k = 500, pairs = 20;
+    unsigned np = 65000, nq = 262144, k = 500, pairs = 20, shells = 1;
     uint32_t dims[3] = {0, 0, 0};
     const char *mode = "atleast";
     int hashed = 0;
@@ -198,6 +201,11 @@ int main(int argc, char **argv)
             char x1, x2, end;
             ok = sscanf(val, "%u%c%u%c%u%c", &dims[0], &x1, &dims[1], &x2, &dims[2], &end) == 5 &&
                  x1 == 'x' && x2 == 'x' && dims[0] && dims[1] && dims[2];
+        } else if (strcmp(a, "--shells-per-pass") == 0) {
+            if (strcmp(val, "all") == 0)
+                shells = PM_KNN_ALL_SHELLS;
+            else
+                ok = bench_parse_uint(val, 1000000, &shells) && shells > 0;
         } else if (strcmp(a, "--pairs") == 0)
             ok = bench_parse_uint(val, 100000, &pairs) && pairs > 0;
         else if (strcmp(a, "--a") == 0 || strcmp(a, "--b") == 0)
@@ -254,7 +262,7 @@ int main(int argc, char **argv)
                         0,
                         NULL,
                         NULL,
-                        0};
+                        shells};
     if (!variant_create(&v[0], 'A', &d, hashed ? &hd : NULL, ph, np, qs, nq, pairs) ||
         !variant_create(&v[1], 'B', &d, hashed ? &hd : NULL, ph, np, qs, nq, pairs))
         goto done;
@@ -271,9 +279,14 @@ int main(int argc, char **argv)
         snprintf(grid, sizeof grid, "hashed");
     else
         snprintf(grid, sizeof grid, "%ux%ux%u", d.dims[0], d.dims[1], d.dims[2]);
-    printf("%u photons, %u queries, k %u, %s mode, grid %s; A: '%s', B: '%s'; %u call pairs (A B, "
-           "B A)\n",
-           np, nq, k, mode, grid, v[0].options, v[1].options, pairs);
+    char spp[16];
+    if (shells == PM_KNN_ALL_SHELLS)
+        snprintf(spp, sizeof spp, "all");
+    else
+        snprintf(spp, sizeof spp, "%u", shells);
+    printf("%u photons, %u queries, k %u, %s mode, grid %s, shells per pass %s; A: '%s', B: '%s'; "
+           "%u call pairs (A B, B A)\n",
+           np, nq, k, mode, grid, spp, v[0].options, v[1].options, pairs);
     fflush(stdout);
 
     for (int f = -2; f < (int)pairs; ++f) {

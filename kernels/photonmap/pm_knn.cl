@@ -1191,13 +1191,24 @@ __attribute__((always_inline)) static inline void pm_reach_run(pm_lanes *L, pm_s
     }
 }
 
+/* Rows holding at most this many photons are not trimmed to the cells the
+ * lanes reach (pm_row_span: a square root and two reductions across the
+ * lanes): testing their photons costs less. Purcell's planar 250x1x250 grids
+ * hold a photon or two a cell, and the faces of a shell across x are columns
+ * of one-cell rows (measured, bench/README.md). */
+#ifndef PM_REACH_TRIM_MIN
+#define PM_REACH_TRIM_MIN 4u
+#endif
+
 /* pm_scan_box for the lanes `on` in lockstep, before the k-th photon (the
  * bound is the maximum radius): the cells [b0, b1] row by row along x, each
  * row trimmed to the cells any lane still short of k can reach, and split
  * about the hole (the cube of half-side `hole` about qc, already explored;
  * none when hole < 0) as pm_scan_row splits it. So every lane meets its
  * photons in the order its own scan would, and those it would not meet lie
- * beyond its reach. Stops when no lane is short of k. */
+ * beyond its reach. Stops when no lane is short of k. An empty row costs
+ * three reads: a plane's gap is worked out at its first row with photons,
+ * and rows of a few photons are not trimmed (PM_REACH_TRIM_MIN). */
 static inline void pm_reach_box(pm_lanes *L, pm_sumi on, const int *b0, const int *b1, const int *n,
                                 const int *qc, int hole, const pg_params *g, const pm_knn_params *p,
                                 global const float *map, global const uint *map_start,
@@ -1210,24 +1221,33 @@ static inline void pm_reach_box(pm_lanes *L, pm_sumi on, const int *b0, const in
         pm_sumi want = on & (L->cnt < k);
         if (!PM_SUM_MASK(want))
             return;
-        pm_sumf gz = pm_gap2_lanes(L->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2], p->box_lo[2],
-                                   p->box_hi[2]);
-        pm_sumi zon = want & (gz <= bound);
-        if (!PM_SUM_MASK(zon))
-            continue;
         uint plane = (uint)n[0] * (uint)n[1] * (uint)z;
+        pm_sumf gz = (pm_sumf)(0.0f);
+        pm_sumi zon = want;
+        int z_tested = 0;
         for (int y = b0[1]; y <= b1[1]; ++y) {
             uint row = plane + (uint)n[0] * (uint)y;
-            if (!pm_row_holds(map_start, cell_count, row, b0[0], b1[0]))
+            uint rb = map_start[row + (uint)b0[0]],
+                 re = map_start[row + (uint)b1[0]] + cell_count[row + (uint)b1[0]];
+            if (rb == re)
                 continue;
+            if (!z_tested) {
+                gz = pm_gap2_lanes(L->pz, z, n[2], g->lo[2], g->cell[2], p->margin[2], p->box_lo[2],
+                                   p->box_hi[2]);
+                zon = want & (gz <= bound);
+                z_tested = 1;
+            }
+            if (!PM_SUM_MASK(zon))
+                break;
             pm_sumf t = bound - gz -
                         pm_gap2_lanes(L->py, y, n[1], g->lo[1], g->cell[1], p->margin[1],
                                       p->box_lo[1], p->box_hi[1]);
             pm_sumi ron = zon & (L->cnt < k) & (t >= L->gx);
             if (!PM_SUM_MASK(ron))
                 continue;
-            int xa, xb;
-            if (!pm_row_span(L, t, bound, ron, b0[0], b1[0], g, p, &xa, &xb))
+            int xa = b0[0], xb = b1[0];
+            if (re - rb > PM_REACH_TRIM_MIN &&
+                !pm_row_span(L, t, bound, ron, b0[0], b1[0], g, p, &xa, &xb))
                 continue;
             int ha = xb + 1, hb = xb;
             if (hole >= 0 && abs(y - qc[1]) <= hole && abs(z - qc[2]) <= hole) {
