@@ -333,7 +333,7 @@ static void test_pass_images(void)
 
 static void test_cli(const char *exe)
 {
-    char out[8192], cmd[2048];
+    char out[32768], cmd[2048];
     static const struct {
         const char *args, *expect;
     } bad[] = {
@@ -384,7 +384,8 @@ static void test_cli(const char *exe)
     if (f)
         fclose(f);
     CHECK(strstr(out, "\"trace_photons\"") && strstr(out, "\"stored\"") &&
-              strstr(out, "\"live_per_pass\""),
+              strstr(out, "\"live_per_pass\"") && strstr(out, "\"kernels\": [") &&
+              strstr(out, "{\"name\": \"pm_emit\", \"launches\": "),
           "statistics JSON: %s", out);
     /* progressive: the statistics name the radius, and it shrinks */
     snprintf(cmd, sizeof cmd,

@@ -409,7 +409,11 @@ static void report(FILE *f, int json, const cli *c, const pm_options *o, pm_rend
             s->pass_images_s);
     sr_adaptive_write_json(rt_renderer_sampling(pm_renderer_whitted(r)), f, 2);
     fprintf(f, ",\n");
-    fprintf(f, "  \"skipped\": \"%s\"\n}\n", pm_renderer_skipped(r));
+    fprintf(f, "  \"skipped\": ");
+    sr_json_string(f, pm_renderer_skipped(r));
+    fprintf(f, ",\n");
+    sr_json_kernels(f, ctx, 2);
+    fprintf(f, "\n}\n");
 }
 
 int main(int argc, char **argv)

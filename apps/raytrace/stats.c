@@ -126,21 +126,8 @@ sluice_status rt_stats_write_json(const rt_stats_report *r, sluice_context *ctx,
         sr_adaptive_write_json(r->sampling, f, 2);
         fprintf(f, ",\n");
     }
-    fprintf(f, "  \"kernels\": [");
-    size_t nk = ctx && sluice_profile_enabled(ctx) ? sluice_profile_count(ctx) : 0;
-    for (size_t i = 0; i < nk; ++i) {
-        sluice_profile_entry e;
-        if (sluice_profile_get(ctx, i, &e) != SLUICE_OK)
-            continue;
-        fprintf(f, "%s\n    {\"name\": ", i ? "," : "");
-        sr_json_string(f, e.name);
-        fprintf(f,
-                ", \"launches\": %llu, \"records_in\": %llu, \"records_out\": %llu, "
-                "\"seconds\": %.6g}",
-                (unsigned long long)e.launches, (unsigned long long)e.records_in,
-                (unsigned long long)e.records_out, e.device_seconds);
-    }
-    fprintf(f, "\n  ]\n}\n");
+    sr_json_kernels(f, ctx, 2);
+    fprintf(f, "\n}\n");
     if (fclose(f) != 0) {
         if (err && err_size)
             snprintf(err, err_size, "%s: write failed", path);
