@@ -19,6 +19,10 @@ on both alike. Printed per phase and per kernel (the renderer's profile, in
 its --stats file): A's and B's medians and the median over rounds of B's
 speed over A's (A's time over B's) with its quartiles.
 
+Whole renders drift more than one process's calls do: a null run
+(--b=-DNOTHING_AT_ALL) shows how far apart two equal variants come out on
+the machine at hand (bench/README.md).
+
 Exit status 0, or 2 on bad arguments or a render that failed."""
 import argparse
 import json
@@ -43,7 +47,8 @@ def render(exe, options, args, stats, device):
     r = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if r.returncode != 0:
         sys.stderr.write(r.stdout)
-        raise SystemExit("bench_photonmap_ab: %s failed (exit status %d)" % (exe, r.returncode))
+        sys.stderr.write("bench_photonmap_ab: %s failed (exit status %d)\n" % (exe, r.returncode))
+        sys.exit(2)
     with open(stats) as f:
         d = json.load(f)
     t = {"phase " + p: d["phases"][p] for p in PHASES}
@@ -64,8 +69,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--exe-a", default="build/apps/photonmap/sluice-photonmap")
     ap.add_argument("--exe-b", default="build/apps/photonmap/sluice-photonmap")
-    ap.add_argument("--a", default="", help="kernel build options for A (default none)")
-    ap.add_argument("--b", default="", help="kernel build options for B (default none)")
+    ap.add_argument("--a", default="", help="kernel build options for A (default none; write --a=-DNAME)")
+    ap.add_argument("--b", default="", help="kernel build options for B (default none; write --b=-DNAME)")
     ap.add_argument("--scene", default="ring", choices=sorted(PURCELL))
     ap.add_argument("--map", default="stencil", choices=["bitonic", "stencil", "count"])
     ap.add_argument("--defaults", action="store_true",
