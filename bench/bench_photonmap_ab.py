@@ -6,7 +6,7 @@ process for the search and the tracer).
 
   bench/bench_photonmap_ab.py [--exe-a EXE] [--exe-b EXE] [--a OPTIONS] [--b OPTIONS]
                               [--scene glassball|ring|cornell] [--map bitonic|stencil|count]
-                              [--defaults] [--rounds N] [--quick] [--device NAME]
+                              [--defaults] [--rounds N] [--spp N] [--quick] [--device NAME]
 
 Variant A is --exe-a with the kernel build options --a (SLUICE_BUILD_OPTIONS),
 variant B --exe-b with --b: two builds of the renderer (an older commit's, in
@@ -77,6 +77,9 @@ def main():
                     help="the renderer's defaults (stream tracer, one shell a pass), not "
                     "--exec fused --shells-per-pass all")
     ap.add_argument("--rounds", type=int, default=10, help="A B / B A rounds (default 10)")
+    ap.add_argument("--spp", type=int, default=1,
+                    help="samples per pixel: each traces the rays and estimates again "
+                    "(default 1, Purcell's)")
     ap.add_argument("--kernels", type=int, default=8,
                     help="kernels shown, the slowest first (default 8)")
     ap.add_argument("--quick", action="store_true", help="128x96 images, for the smoke test")
@@ -84,13 +87,15 @@ def main():
     a = ap.parse_args()
     if a.rounds < 1:
         ap.error("--rounds must be at least 1")
+    if a.spp < 1:
+        ap.error("--spp must be at least 1")
     for exe in (a.exe_a, a.exe_b):
         if not os.access(exe, os.X_OK):
             ap.error("%s: not an executable (build first, or name it)" % exe)
     s = PURCELL[a.scene]
     args = ["--scene", a.scene, "--size", "128x96" if a.quick else s["size"],
             "--photons", str(s["photons"]), "--k", str(s["k"]), "--grid", s["grid"],
-            "--light-samples", str(s["light_samples"]), "--map", a.map]
+            "--light-samples", str(s["light_samples"]), "--map", a.map, "--spp", str(a.spp)]
     if not a.defaults:
         args += FAST
     variants = [(a.exe_a, a.a), (a.exe_b, a.b)]

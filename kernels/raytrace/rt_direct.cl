@@ -189,7 +189,7 @@ __kernel void rt_direct(SLUICE_PARAMS, global const rt_ray *rays, global const r
                 float dir[3][RT_LIGHT_LANES], tmax[RT_LIGHT_LANES], wl[3][RT_LIGHT_LANES];
                 rt_light_block8(k0, &lx, &s, 1, &f, area_tris, area_cdf, stv, tri_mat, mats, gos,
                                 dir, tmax, wl);
-                for (uint l = 0u; l < RT_LIGHT_LANES; ++l) {
+                for (uint l = 0u; l < min((uint)RT_LIGHT_LANES, lx.full - k0); ++l) {
                     if (!gos[l])
                         continue;
                     /* rt_spawn's ray: from o, along dir, to tmax */

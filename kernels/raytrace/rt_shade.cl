@@ -61,7 +61,8 @@ inline float3 rt_area_light_weight(const rt_surface *s, float3 wo, float3 w, flo
  * and its way back wo, what the BRDF can pass (reach), each sample's share
  * of the lights' area (per_sample), the key of its samples, its triangle
  * (no light from itself), and how many samples: nl, the first `full` of
- * them in blocks of RT_LIGHT_LANES. */
+ * them in blocks of RT_LIGHT_LANES (the last block's lanes from `full` on
+ * unused), the rest one at a time. */
 typedef struct rt_light_ctx {
     float3 off, o, w, wo, reach;
     float per_sample;
@@ -81,7 +82,10 @@ inline rt_light_ctx rt_light_ctx_at(const rt_surface *s, const rt_ray *ray, uint
     c.skey = rt_key(ray->key, 16u);
     c.tri = tri;
     c.nl = nl;
-    c.full = nl / RT_LIGHT_LANES * RT_LIGHT_LANES;
+    /* a rest of two samples or more takes a block too, its other lanes
+     * unused: cheaper than the samples one at a time (one alone is not;
+     * measured, bench/README.md), and the same rays bit for bit */
+    c.full = nl % RT_LIGHT_LANES >= 2u ? nl : nl / RT_LIGHT_LANES * RT_LIGHT_LANES;
     return c;
 }
 
@@ -290,7 +294,7 @@ __kernel void rt_shade(SLUICE_PARAMS, global const rt_ray *rays, global const rt
             float dir[3][RT_LIGHT_LANES], tmax[RT_LIGHT_LANES], wl[3][RT_LIGHT_LANES];
             rt_light_block8(k0, &lx, &s, SLUICE_WRITING, &f, area_tris, area_cdf, tv, tri_mat, mats,
                             gos, dir, tmax, wl);
-            for (uint l = 0u; l < RT_LIGHT_LANES; ++l) {
+            for (uint l = 0u; l < min((uint)RT_LIGHT_LANES, lx.full - k0); ++l) {
                 RT_EMIT_SHADOW(gos[l], rt_spawn(s.p, off, (float3)(dir[0][l], dir[1][l], dir[2][l]),
                                                 tmax[l], (float3)(wl[0][l], wl[1][l], wl[2][l]),
                                                 ray.pixel, 0u, RT_KIND_SHADOW | RT_FLAG_ANY_HIT));
