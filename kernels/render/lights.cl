@@ -153,8 +153,7 @@ inline float3 rt_uniform_sphere(float u1, float u2)
 {
     float z = 1.0f - 2.0f * u1;
     float r = sqrt(fmax(0.0f, 1.0f - z * z));
-    float phi = 2.0f * RT_PI * u2;
-    return (float3)(r * cos(phi), r * sin(phi), z);
+    return (float3)(r * cospi(2.0f * u2), r * sinpi(2.0f * u2), z); /* turns: rt_about */
 }
 
 /* A uniform direction in the cone about the unit axis `n` whose solid angle
@@ -163,7 +162,7 @@ inline float3 rt_uniform_sphere(float u1, float u2)
 inline float3 rt_cone_dir(float3 n, float omc, float u1, float u2)
 {
     float t = u1 * omc; /* 1 - cos theta */
-    return rt_about(n, 2.0f * RT_PI * u2, sqrt(fmax(0.0f, t * (2.0f - t))), 1.0f - t);
+    return rt_about(n, u2, sqrt(fmax(0.0f, t * (2.0f - t))), 1.0f - t);
 }
 
 #endif
