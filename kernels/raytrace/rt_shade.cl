@@ -83,8 +83,9 @@ inline rt_light_ctx rt_light_ctx_at(const rt_surface *s, const rt_ray *ray, uint
     c.tri = tri;
     c.nl = nl;
     /* a rest of two samples or more takes a block too, its other lanes
-     * unused: cheaper than the samples one at a time (one alone is not;
-     * measured, bench/README.md), and the same rays bit for bit */
+     * unused: cheaper than the samples one at a time, which one alone is
+     * not (measured, bench/README.md); a block's lanes compute the same
+     * rays as rt_light_one and rt_light_one_ray */
     c.full = nl % RT_LIGHT_LANES >= 2u ? nl : nl / RT_LIGHT_LANES * RT_LIGHT_LANES;
     return c;
 }

@@ -155,8 +155,7 @@ inline float rt_fresnel(float cos_i, float cos_t, int entering, float ior)
  * cosine to it are `st` and `ct`; the tangent frame is Duff et al.'s (JCGT
  * 2017). The angle goes in turns to sinpi and cospi, whose reduction of
  * the argument is exact and cheap: sin and cos of 2 pi u took the slow
- * path of a full argument reduction (pm_emit 1.5x as fast; measured,
- * bench/README.md). */
+ * path of a full argument reduction (measured, bench/README.md). */
 inline float3 rt_about(float3 n, float turn, float st, float ct)
 {
     float sign = n.z >= 0.0f ? 1.0f : -1.0f;
