@@ -6,7 +6,8 @@ process for the search and the tracer).
 
   bench/bench_photonmap_ab.py [--exe-a EXE] [--exe-b EXE] [--a OPTIONS] [--b OPTIONS]
                               [--scene glassball|ring|cornell] [--map bitonic|stencil|count]
-                              [--defaults] [--rounds N] [--spp N] [--quick] [--device NAME]
+                              [--defaults] [--rounds N] [--spp N] [--args "OPTIONS"]
+                              [--quick] [--device NAME]
 
 Variant A is --exe-a with the kernel build options --a (SLUICE_BUILD_OPTIONS),
 variant B --exe-b with --b: two builds of the renderer (an older commit's, in
@@ -80,6 +81,9 @@ def main():
     ap.add_argument("--spp", type=int, default=1,
                     help="samples per pixel: each traces the rays and estimates again "
                     "(default 1, Purcell's)")
+    ap.add_argument("--args", default="",
+                    help="more sluice-photonmap options for both, one string "
+                    "(e.g. --args=\"--progressive --spp 8\")")
     ap.add_argument("--kernels", type=int, default=8,
                     help="kernels shown, the slowest first (default 8)")
     ap.add_argument("--quick", action="store_true", help="128x96 images, for the smoke test")
@@ -98,6 +102,7 @@ def main():
             "--light-samples", str(s["light_samples"]), "--map", a.map, "--spp", str(a.spp)]
     if not a.defaults:
         args += FAST
+    args += a.args.split()
     variants = [(a.exe_a, a.a), (a.exe_b, a.b)]
     times = [[], []]
     with tempfile.TemporaryDirectory() as tmp:
