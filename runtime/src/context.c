@@ -242,6 +242,8 @@ sluice_status sluice_context_create(const sluice_context_options *options, sluic
     ctx->no_spread = opt.no_spread;
     ctx->no_chain = opt.no_chain;
     ctx->group_chain = env_on("SLUICE_GROUP_CHAIN");
+    ctx->chain_cpu =
+        ctx->info.is_cpu && strstr(ctx->info.platform, "Portable Computing Language") != NULL;
     ctx->layout = opt.layout != SLUICE_LAYOUT_AUTO ? (int)opt.layout
                   : ctx->info.is_cpu               ? SLUICE_LAYOUT_CONTIGUOUS
                                                    : SLUICE_LAYOUT_INTERLEAVED;

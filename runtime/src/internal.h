@@ -80,6 +80,8 @@ struct sluice_context {
     int no_spread;   /* sluice_context_options.no_spread */
     int no_chain;    /* sluice_context_options.no_chain */
     int group_chain; /* SLUICE_GROUP_CHAIN=1: chained launches in the interleaved layout too */
+    int chain_cpu;   /* PoCL on a CPU: a group's work-items run one after another, as the
+                        contiguous layout's chain needs (set once, at creation) */
     /* Variable pool. */
     cl_mem vars;
     unsigned char *var_used;

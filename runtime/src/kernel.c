@@ -444,9 +444,7 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
      * it is measured on a GPU. */
     const int contiguous = ctx->layout == SLUICE_LAYOUT_CONTIGUOUS;
     int chain = L.ordered_mask && !k->uneven && !ctx->no_chain &&
-                (contiguous ? ctx->info.is_cpu &&
-                                  strstr(ctx->info.platform, "Portable Computing Language") != NULL
-                            : ctx->group_chain);
+                (contiguous ? ctx->chain_cpu : ctx->group_chain);
     size_t chunk = choose_chunk(ctx, bound);
     if (chain && contiguous && !ctx->chunk) {
         /* A chained chunk costs a few cross-core reads and writes: at 16 to
@@ -489,11 +487,11 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
 
     sluice_status st = SLUICE_OK;
     L.interleave = ctx->layout == SLUICE_LAYOUT_INTERLEAVED;
+    size_t rows = 0; /* ordered outputs' rows: up to the highest ordered slot */
+    for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
+        if ((L.ordered_mask >> s) & 1u)
+            rows = s + 1;
     if (queued && chain) {
-        size_t rows = 0; /* rows up to the highest ordered slot */
-        for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
-            if ((L.ordered_mask >> s) & 1u)
-                rows = s + 1;
         st = sl_chain_reserve(ctx, (1 + (1 + 2 * rows) * L.stride) * sizeof(cl_uint));
         if (st != SLUICE_OK)
             return st;
@@ -508,10 +506,6 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
             return st;
     } else if (queued) {
         if (L.ordered_mask) {
-            size_t rows = 0; /* rows up to the highest ordered slot */
-            for (unsigned s = 0; s < SLUICE_MAX_OUTPUTS; ++s)
-                if ((L.ordered_mask >> s) & 1u)
-                    rows = s + 1;
             st = sl_scratch_reserve(ctx, rows * L.stride * sizeof(cl_uint));
             if (st != SLUICE_OK)
                 return st;
