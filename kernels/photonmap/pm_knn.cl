@@ -125,6 +125,55 @@ static inline int pm_last_shell(const int *qc, const int *n, int s)
     return s;
 }
 
+/* Where a box of shells from s on ends (pm_knn_pass, pm_knn_reach): at the
+ * first shell v >= s where the caller's test says stop, 1 when shell v
+ * would let the search reach k photons (by the summed counts: the box ends
+ * at v - 1) or 2 when the search ends at v (its cube reaches the maximum
+ * radius or covers the grid: the box ends at v). Both only turn true as v
+ * grows, and the grid's last shell covers it, so v is found by doubling
+ * steps and then halving them; one shell at a time, crossing many shells
+ * without photons near the maximum radius took most of pm_knn_reach's own
+ * time. The caller asks:
+ *   pm_box_end f = pm_box_end_start(s, last);
+ *   for (int v; pm_box_end_next(&f, &v);) pm_box_end_tell(&f, test(v));
+ *   u = pm_box_end_last(&f);   (s - 1: no box) */
+typedef struct pm_box_end {
+    int lo, hi, last, step, r, probe; /* no stop up to lo, a stop r at hi (-1: not yet) */
+} pm_box_end;
+
+static inline pm_box_end pm_box_end_start(int s, int last)
+{
+    pm_box_end f = {s - 1, -1, last, 1, 0, s};
+    return f;
+}
+
+static inline int pm_box_end_next(const pm_box_end *f, int *v)
+{
+    *v = f->probe;
+    return f->hi < 0 || f->hi - f->lo > 1;
+}
+
+static inline void pm_box_end_tell(pm_box_end *f, int r)
+{
+    if (r || f->probe >= f->last) {
+        f->hi = f->probe;
+        f->r = r;
+    } else {
+        f->lo = f->probe;
+    }
+    if (f->hi < 0) {
+        f->probe = min(f->lo + f->step, f->last);
+        f->step *= 2;
+    } else {
+        f->probe = f->lo + (f->hi - f->lo) / 2;
+    }
+}
+
+static inline int pm_box_end_last(const pm_box_end *f)
+{
+    return f->r == 1 ? f->hi - 1 : f->hi;
+}
+
 /* Face `side` (0 .. 5: -x, +x, -y, +y, -z, +z) of shell s about cell qc as
  * a box of cells [b0, b1], each cell of the shell in one face only: the
  * faces across x whole, those across y without the x faces' cells, those
@@ -752,16 +801,17 @@ __kernel void pm_knn_pass(SLUICE_PARAMS, global const uint *live, global const u
              * the shells would have stopped: at d_u >= the maximum radius, or
              * covering the grid. */
             uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n) : 0u;
-            int u = s - 1;
-            for (;;) {
-                if (st.count + (pm_cube_count(sat, qc, u + 1, n) - before) >= p.k)
-                    break;
-                ++u;
-                int cov;
-                float du = pm_cube_d2(qp, qc, u, n, &g, &p, &cov);
-                if (cov || du >= p.max_r2)
-                    break;
+            pm_box_end f = pm_box_end_start(s, pm_last_shell(qc, n, s));
+            for (int v; pm_box_end_next(&f, &v);) {
+                int cov = 0;
+                int r = st.count + (pm_cube_count(sat, qc, v, n) - before) >= p.k;
+                if (!r) {
+                    float dv = pm_cube_d2(qp, qc, v, n, &g, &p, &cov);
+                    r = cov || dv >= p.max_r2 ? 2 : 0;
+                }
+                pm_box_end_tell(&f, r);
             }
+            int u = pm_box_end_last(&f);
             if (u > s) {
                 int b0[3], b1[3];
                 pm_cube_cells(qc, u, n, b0, b1);
@@ -1365,16 +1415,17 @@ __kernel void pm_knn_reach(SLUICE_PARAMS, global const uint *order, global const
                 /* shells no lane can reach k in: one box */
                 uint before = s > 0 ? pm_cube_count(sat, qc, s - 1, n3) : 0u;
                 uint most = (uint)pm_sum_hmax(select((pm_sumi)(0), L.cnt, live));
-                int u = s - 1;
-                for (;;) {
-                    if (most + (pm_cube_count(sat, qc, u + 1, n3) - before) >= p.k)
-                        break;
-                    ++u;
-                    int cov;
-                    pm_sumf du = pm_cube_d2_lanes(&L, qc, u, n3, &g, &p, &cov);
-                    if (cov || PM_SUM_MASK(live & (du >= (pm_sumf)(p.max_r2))))
-                        break;
+                pm_box_end f = pm_box_end_start(s, pm_last_shell(qc, n3, s));
+                for (int v; pm_box_end_next(&f, &v);) {
+                    int cov = 0;
+                    int r = most + (pm_cube_count(sat, qc, v, n3) - before) >= p.k;
+                    if (!r) {
+                        pm_sumf dv = pm_cube_d2_lanes(&L, qc, v, n3, &g, &p, &cov);
+                        r = cov || PM_SUM_MASK(live & (dv >= (pm_sumf)(p.max_r2))) ? 2 : 0;
+                    }
+                    pm_box_end_tell(&f, r);
                 }
+                int u = pm_box_end_last(&f);
                 if (u > s) {
                     int b0[3], b1[3];
                     pm_cube_cells(qc, u, n3, b0, b1);
