@@ -42,10 +42,22 @@ static int cmp_float(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* The kernels' squared distance and normal-filter dot product (PM_D2_ and
+ * PM_DOT_ in pm_knn.cl), the same fused operations, so that radii agree
+ * bit for bit. */
+static float fused_d2(float dx, float dy, float dz)
+{
+    return fmaf(dz, dz, fmaf(dy, dy, dx * dx));
+}
+
+static float fused_dot(const pm_query *q, const pm_photon *p)
+{
+    return fmaf(q->nz, p->dz, fmaf(q->ny, p->dy, q->nx * p->dx));
+}
+
 static float dist2(const pm_photon *p, const pm_query *q)
 {
-    float dx = p->px - q->px, dy = p->py - q->py, dz = p->pz - q->pz;
-    return dx * dx + dy * dy + dz * dz;
+    return fused_d2(p->px - q->px, p->py - q->py, p->pz - q->pz);
 }
 
 typedef struct fixture {
@@ -460,12 +472,10 @@ static void radius_brute(const pm_photon *ph, size_t np, const pm_query *qs, siz
         out->start[q] = (uint32_t)len;
         for (size_t i = 0; i < np && isfinite(qs[q].px) && isfinite(qs[q].py) && isfinite(qs[q].pz);
              ++i) {
-            float dx = ph[i].px - qs[q].px, dy = ph[i].py - qs[q].py, dz = ph[i].pz - qs[q].pz;
-            float d2 = dx * dx + dy * dy + dz * dz;
+            float d2 = dist2(&ph[i], &qs[q]);
             if (!(d2 <= r2))
                 continue;
-            if (normal_filter &&
-                !(qs[q].nx * ph[i].dx + qs[q].ny * ph[i].dy + qs[q].nz * ph[i].dz < 0.0f))
+            if (normal_filter && !(fused_dot(&qs[q], &ph[i]) < 0.0f))
                 continue;
             if (len == cap) {
                 cap *= 2;

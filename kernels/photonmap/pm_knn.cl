@@ -42,6 +42,16 @@ static inline float pm_box_d2(const float *qp, const pm_knn_params *p)
     return d2;
 }
 
+/* A photon's squared distance from a query, and the dot product of the
+ * normal filter, as every kernel here computes them at every width: the
+ * same fused multiply-adds (the program's FP_CONTRACT is off, pg_types.h,
+ * so nothing else is fused), so that a radius one search sets from a
+ * photon holds that photon in another, and test_knn's host references
+ * (fmaf) agree bit for bit. Three operations each where products and sums
+ * took five. */
+#define PM_D2_(dx, dy, dz) fma((dz), (dz), fma((dy), (dy), (dx) * (dx)))
+#define PM_DOT_(nx, ny, nz, x, y, z) fma((nz), (z), fma((ny), (y), (nx) * (x)))
+
 /* Narrows the cells [*a, *b] of an axis to those whose slab may lie within
  * sqrt(t) of x, by the cell function (monotonic in x), where t is what a
  * bound on the squared distance leaves along this axis. The reach takes in
@@ -354,13 +364,12 @@ pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params *p, uint exact,
             float dx = map[PM_MAP_X * stride + j] - st->px,
                   dy = map[PM_MAP_Y * stride + j] - st->py,
                   dz = map[PM_MAP_Z * stride + j] - st->pz;
-            float d2 = dx * dx + dy * dy + dz * dz;
+            float d2 = PM_D2_(dx, dy, dz);
             if (!(d2 <= p->max_r2))
                 continue;
             if (p->normal_filter &&
-                !(st->nx * map[PM_MAP_DX * stride + j] + st->ny * map[PM_MAP_DY * stride + j] +
-                      st->nz * map[PM_MAP_DZ * stride + j] <
-                  0.0f))
+                !(PM_DOT_(st->nx, st->ny, st->nz, map[PM_MAP_DX * stride + j],
+                          map[PM_MAP_DY * stride + j], map[PM_MAP_DZ * stride + j]) < 0.0f))
                 continue;
             if (exact) {
                 pm_heap_add(st, p->k, d2, j);
@@ -384,12 +393,13 @@ pm_scan_run(pm_state *st, uint b, uint e, const pm_knn_params *p, uint exact,
         float8 dx = vload8(0, map + PM_MAP_X * stride + j) - st->px;
         float8 dy = vload8(0, map + PM_MAP_Y * stride + j) - st->py;
         float8 dz = vload8(0, map + PM_MAP_Z * stride + j) - st->pz;
-        float8 d2 = dx * dx + dy * dy + dz * dz;
+        float8 d2 = PM_D2_(dx, dy, dz);
         int8 m = (lane < (int8)((int)(e - j))) & (d2 <= (float8)(p->max_r2));
         if (p->normal_filter) {
-            float8 c = st->nx * vload8(0, map + PM_MAP_DX * stride + j) +
-                       st->ny * vload8(0, map + PM_MAP_DY * stride + j) +
-                       st->nz * vload8(0, map + PM_MAP_DZ * stride + j);
+            float8 c = PM_DOT_((float8)(st->nx), (float8)(st->ny), (float8)(st->nz),
+                               vload8(0, map + PM_MAP_DX * stride + j),
+                               vload8(0, map + PM_MAP_DY * stride + j),
+                               vload8(0, map + PM_MAP_DZ * stride + j));
             m &= c < (float8)(0.0f);
         }
         if (!exact && st->count >= p->k)
@@ -968,11 +978,11 @@ static inline void pm_lanes_load(pm_lanes *L, const float *x, const float *y, co
         pm_gap2_lanes(L->px, 0, 1, g->lo[0], g->cell[0], p->margin[0], p->box_lo[0], p->box_hi[0]);
 }
 
-/* The squared length of (dx, dy, dz), lane by lane: pm_scan_run's
- * expression, so that the photon that set a radius is within it here too. */
+/* The squared length of (dx, dy, dz), lane by lane (PM_D2_, as
+ * pm_scan_run computes it). */
 __attribute__((always_inline)) static inline pm_sumf pm_sum_d2(pm_sumf dx, pm_sumf dy, pm_sumf dz)
 {
-    return dx * dx + dy * dy + dz * dz;
+    return PM_D2_(dx, dy, dz);
 }
 
 /* The squared distance from the lanes' queries to photon m[0] (planes
@@ -989,9 +999,9 @@ __attribute__((always_inline)) static inline pm_sumf pm_photon_d2(global const f
 __attribute__((always_inline)) static inline pm_sumi pm_facing(global const float *m, uint stride,
                                                                const pm_lanes *L)
 {
-    return L->nx * m[PM_MAP_DX * stride] + L->ny * m[PM_MAP_DY * stride] +
-               L->nz * m[PM_MAP_DZ * stride] <
-           (pm_sumf)(0.0f);
+    return PM_DOT_(L->nx, L->ny, L->nz, (pm_sumf)(m[PM_MAP_DX * stride]),
+                   (pm_sumf)(m[PM_MAP_DY * stride]),
+                   (pm_sumf)(m[PM_MAP_DZ * stride])) < (pm_sumf)(0.0f);
 }
 
 /* pm_knn_sum's test of photon m[0] for the lanes `on`: within the radius
@@ -1005,15 +1015,22 @@ pm_sum_take(global const float *m, uint stride, const pm_lanes *L, pm_sumi on, u
     return take;
 }
 
+/* Adds the photon's power to the lanes that take it. */
+__attribute__((always_inline)) static inline void pm_sum_power(global const float *m, uint stride,
+                                                               pm_sumi take, pm_lanes *L)
+{
+    /* a masked add (one instruction with AVX-512), not an add of a select */
+    L->sr = select(L->sr, L->sr + m[PM_MAP_R * stride], take);
+    L->sg = select(L->sg, L->sg + m[PM_MAP_G * stride], take);
+    L->sb = select(L->sb, L->sb + m[PM_MAP_B * stride], take);
+}
+
 /* Counts the photon for the lanes that take it and adds its power. */
 __attribute__((always_inline)) static inline void pm_sum_add(global const float *m, uint stride,
                                                              pm_sumi take, pm_lanes *L)
 {
     L->cnt -= take; /* a true lane is -1 */
-    /* a masked add (one instruction with AVX-512), not an add of a select */
-    L->sr = select(L->sr, L->sr + m[PM_MAP_R * stride], take);
-    L->sg = select(L->sg, L->sg + m[PM_MAP_G * stride], take);
-    L->sb = select(L->sb, L->sb + m[PM_MAP_B * stride], take);
+    pm_sum_power(m, stride, take, L);
 }
 
 /* Lists photon `id` as photon number cnt of each lane of `take` (lane l the
@@ -1037,6 +1054,26 @@ __attribute__((always_inline)) static inline void pm_sum_list(pm_sumi take, pm_s
     }
 }
 
+/* pm_sum_add for the photons m[0 .. len), counted in floats: a masked add
+ * a photon, where the integer count took three instructions (the mask made
+ * a vector and back). Exact: at most 2^20 photons are counted before the
+ * count goes to L->cnt. */
+__attribute__((always_inline)) static inline void pm_sum_counted(global const float *m, uint len,
+                                                                 uint stride, pm_lanes *L,
+                                                                 pm_sumi on, uint normal_filter)
+{
+    for (uint b = 0; b < len; b += 1u << 20) {
+        uint e = min(len, b + (1u << 20));
+        pm_sumf cf = (pm_sumf)(0.0f);
+        for (uint j = b; j < e; ++j) {
+            pm_sumi take = pm_sum_take(m + j, stride, L, on, normal_filter);
+            cf = select(cf, cf + 1.0f, take);
+            pm_sum_power(m + j, stride, take, L);
+        }
+        L->cnt += PM_SUM_CONVERT_INT(cf);
+    }
+}
+
 /* pm_knn_sum over the photons m[0 .. len) for the lanes `on`, one photon at
  * a time. */
 __attribute__((always_inline)) static inline void pm_sum_run(global const float *m, uint len,
@@ -1055,11 +1092,9 @@ __attribute__((always_inline)) static inline void pm_sum_run(global const float 
             pm_sum_add(m + j, stride, take, L);
         }
     } else if (p->normal_filter) {
-        for (uint j = 0; j < len; ++j)
-            pm_sum_add(m + j, stride, pm_sum_take(m + j, stride, L, on, 1u), L);
+        pm_sum_counted(m, len, stride, L, on, 1u);
     } else {
-        for (uint j = 0; j < len; ++j)
-            pm_sum_add(m + j, stride, pm_sum_take(m + j, stride, L, on, 0u), L);
+        pm_sum_counted(m, len, stride, L, on, 0u);
     }
 }
 
@@ -1526,7 +1561,7 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
             float x = map[PM_MAP_X * stride + j], y = map[PM_MAP_Y * stride + j],
                   z = map[PM_MAP_Z * stride + j];
             float dx = x - st->px, dy = y - st->py, dz = z - st->pz;
-            float d2 = dx * dx + dy * dy + dz * dz;
+            float d2 = PM_D2_(dx, dy, dz);
             if (!(d2 <= p->max_r2))
                 continue;
             if ((int)pg_hash_axis(x, h->lo[0], h->inv_cell) != c[0] ||
@@ -1534,9 +1569,8 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
                 (int)pg_hash_axis(z, h->lo[2], h->inv_cell) != c[2])
                 continue;
             if (p->normal_filter &&
-                !(st->nx * map[PM_MAP_DX * stride + j] + st->ny * map[PM_MAP_DY * stride + j] +
-                      st->nz * map[PM_MAP_DZ * stride + j] <
-                  0.0f))
+                !(PM_DOT_(st->nx, st->ny, st->nz, map[PM_MAP_DX * stride + j],
+                          map[PM_MAP_DY * stride + j], map[PM_MAP_DZ * stride + j]) < 0.0f))
                 continue;
             st->r2 = fmax(st->r2, d2);
             if (p->index_cap)
@@ -1555,7 +1589,7 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
         float8 y = vload8(0, map + PM_MAP_Y * stride + j);
         float8 z = vload8(0, map + PM_MAP_Z * stride + j);
         float8 dx = x - st->px, dy = y - st->py, dz = z - st->pz;
-        float8 d2 = dx * dx + dy * dy + dz * dz;
+        float8 d2 = PM_D2_(dx, dy, dz);
         int8 m = (lane < (int8)((int)(e - j))) & (d2 <= (float8)(p->max_r2));
 #ifdef PM_SKIP_EMPTY /* as in pm_scan_run */
         if (!sluice_mask8(m))
@@ -1565,9 +1599,10 @@ static inline void pm_scan_bucket(pm_state *st, uint b, uint e, const int *c,
              (pm_hash_axis8(y, h->lo[1], h->inv_cell) == (int8)(c[1])) &
              (pm_hash_axis8(z, h->lo[2], h->inv_cell) == (int8)(c[2]));
         if (p->normal_filter) {
-            float8 n = st->nx * vload8(0, map + PM_MAP_DX * stride + j) +
-                       st->ny * vload8(0, map + PM_MAP_DY * stride + j) +
-                       st->nz * vload8(0, map + PM_MAP_DZ * stride + j);
+            float8 n = PM_DOT_((float8)(st->nx), (float8)(st->ny), (float8)(st->nz),
+                               vload8(0, map + PM_MAP_DX * stride + j),
+                               vload8(0, map + PM_MAP_DY * stride + j),
+                               vload8(0, map + PM_MAP_DZ * stride + j));
             m &= n < (float8)(0.0f);
         }
 #ifdef PM_SKIP_EMPTY
