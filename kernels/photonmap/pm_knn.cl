@@ -1057,16 +1057,19 @@ __attribute__((always_inline)) static inline void pm_sum_list(pm_sumi take, pm_s
 /* pm_sum_add for the photons m[0 .. len), counted in floats: a masked add
  * a photon, where the integer count took three instructions (the mask made
  * a vector and back). Exact: at most 2^20 photons are counted before the
- * count goes to L->cnt. */
-__attribute__((always_inline)) static inline void pm_sum_counted(global const float *m, uint len,
-                                                                 uint stride, pm_lanes *L,
-                                                                 pm_sumi on, uint normal_filter)
+ * count goes to L->cnt. Every lane tests every photon, not only those of
+ * `on`: a lane without a query has a radius of -1, and a lane the row's
+ * gaps leave out (pm_knn_sum) has no photon of the row within its radius,
+ * so they take nothing; testing `on` cost one instruction of the loop's
+ * twenty-odd a photon. */
+__attribute__((always_inline)) static inline void
+pm_sum_counted(global const float *m, uint len, uint stride, pm_lanes *L, uint normal_filter)
 {
     for (uint b = 0; b < len; b += 1u << 20) {
         uint e = min(len, b + (1u << 20));
         pm_sumf cf = (pm_sumf)(0.0f);
         for (uint j = b; j < e; ++j) {
-            pm_sumi take = pm_sum_take(m + j, stride, L, on, normal_filter);
+            pm_sumi take = pm_sum_take(m + j, stride, L, (pm_sumi)(-1), normal_filter);
             cf = select(cf, cf + 1.0f, take);
             pm_sum_power(m + j, stride, take, L);
         }
@@ -1074,8 +1077,8 @@ __attribute__((always_inline)) static inline void pm_sum_counted(global const fl
     }
 }
 
-/* pm_knn_sum over the photons m[0 .. len) for the lanes `on`, one photon at
- * a time. */
+/* pm_knn_sum over the photons m[0 .. len) for the lanes `on` (without an
+ * index list, every lane: pm_sum_counted), one photon at a time. */
 __attribute__((always_inline)) static inline void pm_sum_run(global const float *m, uint len,
                                                              uint stride, pm_lanes *L, pm_sumi on,
                                                              const pm_knn_params *p,
@@ -1091,10 +1094,10 @@ __attribute__((always_inline)) static inline void pm_sum_run(global const float 
                         p->index_cap, indices, cut);
             pm_sum_add(m + j, stride, take, L);
         }
-    } else if (p->normal_filter) {
-        pm_sum_counted(m, len, stride, L, on, 1u);
+    } else if (p->normal_filter) { /* every lane: see pm_sum_counted */
+        pm_sum_counted(m, len, stride, L, 1u);
     } else {
-        pm_sum_counted(m, len, stride, L, on, 0u);
+        pm_sum_counted(m, len, stride, L, 0u);
     }
 }
 
