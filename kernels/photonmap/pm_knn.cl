@@ -1263,20 +1263,31 @@ __attribute__((always_inline)) static inline void pm_reach_run(pm_lanes *L, pm_s
                                                                global const uint *order, uint first,
                                                                global uint *indices, int *cut)
 {
-    uint stride = p->map_stride;
-    pm_sumi k = (pm_sumi)((int)p->k);
+    /* the lanes and the parameters in registers for the loop: through the
+     * pointers, every photon loaded and stored the running sums, count and
+     * radius, and loaded the parameters (the list's global stores may
+     * alias them, as far as the compiler knows) */
+    pm_lanes l = *L;
+    const uint stride = p->map_stride, cap = p->index_cap, nf = p->normal_filter;
+    const pm_sumf bound = (pm_sumf)(p->max_r2);
+    const pm_sumi k = (pm_sumi)((int)p->k);
     for (uint j = b; j < e; ++j) {
         global const float *m = map + j;
-        pm_sumf d2 = pm_photon_d2(m, stride, L);
-        pm_sumi take = on & (L->cnt < k) & (d2 <= (pm_sumf)(p->max_r2));
-        if (p->normal_filter)
-            take &= pm_facing(m, stride, L);
-        if (p->index_cap && PM_SUM_MASK(take))
-            pm_sum_list(take, L->cnt, as_uint(m[PM_MAP_ID * stride]), order, first, p->index_cap,
-                        indices, cut);
-        L->r2 = select(L->r2, fmax(L->r2, d2), take);
-        pm_sum_add(m, stride, take, L);
+        pm_sumf d2 = pm_photon_d2(m, stride, &l);
+        pm_sumi take = on & (l.cnt < k) & (d2 <= bound);
+        if (nf)
+            take &= pm_facing(m, stride, &l);
+        if (cap && PM_SUM_MASK(take))
+            pm_sum_list(take, l.cnt, as_uint(m[PM_MAP_ID * stride]), order, first, cap, indices,
+                        cut);
+        l.r2 = select(l.r2, fmax(l.r2, d2), take);
+        pm_sum_add(m, stride, take, &l);
     }
+    L->cnt = l.cnt;
+    L->r2 = l.r2;
+    L->sr = l.sr;
+    L->sg = l.sg;
+    L->sb = l.sb;
 }
 
 /* Rows holding at most this many photons are not trimmed to the cells the
