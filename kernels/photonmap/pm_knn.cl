@@ -959,6 +959,7 @@ static inline pm_sumf pm_gap2_lanes(pm_sumf x, int j, int n, float lo, float cel
  * are, their squared radius and their running estimates. */
 typedef struct pm_lanes {
     pm_sumf px, py, pz, nx, ny, nz, gx;
+    pm_sumf box2; /* squared distance to the photons' box (pm_box_d2) */
     pm_sumf r2, sr, sg, sb;
     pm_sumi cnt;
 } pm_lanes;
@@ -976,6 +977,14 @@ static inline void pm_lanes_load(pm_lanes *L, const float *x, const float *y, co
     L->nz = PM_SUM_VLOAD(0, nz);
     L->gx =
         pm_gap2_lanes(L->px, 0, 1, g->lo[0], g->cell[0], p->margin[0], p->box_lo[0], p->box_hi[0]);
+    pm_sumf at[3] = {L->px, L->py, L->pz};
+    L->box2 = (pm_sumf)(0.0f);
+    for (int a = 0; a < 3; ++a) {
+        pm_sumf gap = select(select((pm_sumf)(0.0f), at[a] - p->box_hi[a], at[a] > p->box_hi[a]),
+                             p->box_lo[a] - at[a], at[a] < p->box_lo[a]);
+        gap -= p->margin[a];
+        L->box2 += select((pm_sumf)(0.0f), gap * gap, gap > 0.0f);
+    }
 }
 
 /* The squared length of (dx, dy, dz), lane by lane (PM_D2_, as
@@ -1229,26 +1238,29 @@ __kernel void pm_knn_sum(SLUICE_PARAMS, global const uint *order, global const p
 static inline pm_sumf pm_cube_d2_lanes(const pm_lanes *L, const int *qc, int s, const int *n,
                                        const pg_params *g, const pm_knn_params *p, int *covered)
 {
+    /* the least and the greatest by compares: the lanes' points are finite
+     * (a lane of no query is 0), so no NaN needs fmin's and fmax's care,
+     * which cost four instructions each; the box term is the lanes' own
+     * (pm_lanes_load) */
     pm_sumf x[3] = {L->px, L->py, L->pz};
-    pm_sumf d = (pm_sumf)(INFINITY), box = (pm_sumf)(0.0f);
+    pm_sumf d = (pm_sumf)(INFINITY);
     *covered = 1;
     for (int a = 0; a < 3; ++a) {
         if (qc[a] - s > 0) {
             *covered = 0;
-            d = fmin(d, x[a] - (g->lo[a] + (float)(qc[a] - s) * g->cell[a]) - p->margin[a]);
+            pm_sumf f = x[a] - (g->lo[a] + (float)(qc[a] - s) * g->cell[a]) - p->margin[a];
+            d = select(d, f, f < d);
         }
         if (qc[a] + s < n[a] - 1) {
             *covered = 0;
-            d = fmin(d, g->lo[a] + (float)(qc[a] + s + 1) * g->cell[a] - x[a] - p->margin[a]);
+            pm_sumf f = g->lo[a] + (float)(qc[a] + s + 1) * g->cell[a] - x[a] - p->margin[a];
+            d = select(d, f, f < d);
         }
-        pm_sumf gap = select(select((pm_sumf)(0.0f), x[a] - p->box_hi[a], x[a] > p->box_hi[a]),
-                             p->box_lo[a] - x[a], x[a] < p->box_lo[a]);
-        gap -= p->margin[a];
-        box += select((pm_sumf)(0.0f), gap * gap, gap > 0.0f);
     }
     if (*covered)
         return (pm_sumf)(INFINITY);
-    return fmax(select((pm_sumf)(0.0f), d * d, d > 0.0f), box);
+    pm_sumf dd = select((pm_sumf)(0.0f), d * d, d > 0.0f);
+    return select(L->box2, dd, dd > L->box2);
 }
 
 /* The at-least rule for photons map[b .. e) and the lanes `on`, one photon
