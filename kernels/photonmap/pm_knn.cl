@@ -975,16 +975,13 @@ static inline void pm_lanes_load(pm_lanes *L, const float *x, const float *y, co
     L->nx = PM_SUM_VLOAD(0, nx);
     L->ny = PM_SUM_VLOAD(0, ny);
     L->nz = PM_SUM_VLOAD(0, nz);
+    /* pm_gap2_lanes of a grid of one cell: the gap to the photons' box */
     L->gx =
         pm_gap2_lanes(L->px, 0, 1, g->lo[0], g->cell[0], p->margin[0], p->box_lo[0], p->box_hi[0]);
-    pm_sumf at[3] = {L->px, L->py, L->pz};
-    L->box2 = (pm_sumf)(0.0f);
-    for (int a = 0; a < 3; ++a) {
-        pm_sumf gap = select(select((pm_sumf)(0.0f), at[a] - p->box_hi[a], at[a] > p->box_hi[a]),
-                             p->box_lo[a] - at[a], at[a] < p->box_lo[a]);
-        gap -= p->margin[a];
-        L->box2 += select((pm_sumf)(0.0f), gap * gap, gap > 0.0f);
-    }
+    L->box2 =
+        L->gx +
+        pm_gap2_lanes(L->py, 0, 1, g->lo[1], g->cell[1], p->margin[1], p->box_lo[1], p->box_hi[1]) +
+        pm_gap2_lanes(L->pz, 0, 1, g->lo[2], g->cell[2], p->margin[2], p->box_lo[2], p->box_hi[2]);
 }
 
 /* The squared length of (dx, dy, dz), lane by lane (PM_D2_, as
