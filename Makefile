@@ -18,6 +18,9 @@
 BUILD ?= build
 ASAN_BUILD ?= build-asan
 MESON_FLAGS ?=
+# ctest runs this many tests at once (every core: on a cold PoCL cache most
+# of the suite's time is kernel builds, one core each)
+TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 .PHONY: all deps build demo test bench bench-error references mitsuba-agreement asan sweep fuzz install clean
 
@@ -36,7 +39,7 @@ demo: build
 	$(BUILD)/apps/raytrace/sluice-raytrace --scene cornell --mode shadow --size 512x512 --out cornell.png
 
 test: build
-	ctest --test-dir $(BUILD) --output-on-failure
+	ctest --test-dir $(BUILD) --output-on-failure -j $(TEST_JOBS)
 
 bench:
 	sh tools/install-deps.sh --bench
@@ -85,7 +88,7 @@ asan: deps $(ASAN_BUILD)/build.ninja
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0 \
 	LSAN_OPTIONS=suppressions=$(CURDIR)/tools/lsan.supp:print_suppressions=0 \
 	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-	    ctest --test-dir $(ASAN_BUILD) --output-on-failure
+	    ctest --test-dir $(ASAN_BUILD) --output-on-failure -j $(TEST_JOBS)
 
 # Not part of `make test`: about 600 files, a few minutes with the renderers.
 SWEEP_FLAGS ?=
