@@ -104,6 +104,7 @@ rt_traverse16(const rt_grid_args *g, const rt_packet *r, global const uint *cell
               global const uint *bits, int16 active, int16 *cx, int16 *cy, int16 *cz, uint16 *pos,
               uint16 *visited, int16 *found, int16 *done)
 {
+#ifndef SLUICE_AVX512_
     int16 stopped = (int16)0;
     for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
         if (!rt_any16(active))
@@ -123,6 +124,41 @@ rt_traverse16(const rt_grid_args *g, const rt_packet *r, global const uint *cell
         active &= ~(leave | out);
     }
     if (rt_any16(stopped)) {
+#else
+    /* With AVX-512 the lanes inside the grid and short of their ray's end
+     * step on whether or not their voxel held triangles (a lane that found
+     * one keeps that voxel in f*), so that the step, and the next bit's
+     * read, need not wait for this bit's read: 3.5% faster on bunny-close
+     * on Zen 4; with AVX2's 16 registers the three more vectors cost more
+     * than that (bench/README.md) */
+    int16 stopped = (int16)0;
+    int16 walking = active, fx = *cx, fy = *cy, fz = *cz;
+    for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
+        if (!rt_any16(active))
+            break;
+        *visited += as_uint16(active) & (uint16)1u;
+        int16 ci = rt_cell_index16(g, *cx, *cy, *cz);
+        int16 word = rt_gather_i(bits, ci >> 5, walking);
+        int16 axis;
+        float16 te = rt_voxel_exit16(g, r, *cx, *cy, *cz, &axis);
+        int16 leave = walking & (te >= r->tmax);
+        int16 x = *cx, y = *cy, z = *cz;
+        int16 out = rt_step16(g, r, walking & ~leave, axis, cx, cy, cz);
+        int16 f = active & (((word >> (ci & 31)) & 1) != 0);
+        fx = select(fx, x, f);
+        fy = select(fy, y, f);
+        fz = select(fz, z, f);
+        stopped |= f;
+        active &= ~f;
+        *done |= active & (leave | out);
+        active &= ~(leave | out);
+        walking &= ~(leave | out);
+    }
+    if (rt_any16(stopped)) {
+        *cx = select(*cx, fx, stopped);
+        *cy = select(*cy, fy, stopped);
+        *cz = select(*cz, fz, stopped);
+#endif
         int16 ci = rt_cell_index16(g, *cx, *cy, *cz);
         *pos = select(*pos, as_uint16(rt_gather_i(cell_start, ci, stopped)), as_uint16(stopped));
         *found |= stopped;
