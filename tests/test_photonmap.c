@@ -362,6 +362,10 @@ static void test_cli(const char *exe)
         {"--progressive --photon-grid hash --map stencil", "stencil"},
         {"--frobnicate 1", "--frobnicate"},
         {"--scene no-such-scene.obj", "no-such-scene.obj"},
+        /* where results go is checked before rendering */
+        {"--out no-such-folder/a.png", "the folder no-such-folder does not exist"},
+        {"--stats no-such-folder/s.json", "--stats no-such-folder/s.json"},
+        {"--stats .", "names a folder"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; ++i) {
         snprintf(cmd, sizeof cmd, "%s %s", exe, bad[i].args);
@@ -440,9 +444,11 @@ static void test_cli(const char *exe)
              "%s --scene glassball --size 32x24 --photons 500 --out pm_cli.png --pass-images "
              "no-such-dir/p.png --quiet",
              exe);
+    /* refused before rendering, naming the option and the folder */
     int rc = check_run(cmd, out, sizeof out);
-    CHECK(rc != 0 && strstr(out, "no-such-dir/p-0000.png"), "--pass-images into nowhere: %d %s", rc,
-          out);
+    CHECK(rc == 2 && strstr(out, "--pass-images no-such-dir/p.png") &&
+              strstr(out, "the folder no-such-dir does not exist"),
+          "--pass-images into nowhere: %d %s", rc, out);
     /* --no-image: renders and reports without the image module, writes no
      * image; refused beside an option that writes one */
     remove("out.png");

@@ -1075,6 +1075,10 @@ static void test_cli(const char *exe)
         {"--min-spp 0", "--min-spp"},
         {"--target-error -1", "--target-error"},
         {"--sample-map map.bmp", "--sample-map"},
+        /* where results go is checked before rendering */
+        {"--out no-such-folder/x.png", "the folder no-such-folder does not exist"},
+        {"--stats no-such-folder/s.json --out x.png", "--stats no-such-folder/s.json"},
+        {"--sample-map no-such-folder/m.png --target-error 0.1", "--sample-map"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; ++i) {
         snprintf(cmd, sizeof cmd, "%s %s --out cli_bad.png", exe, bad[i].args);
@@ -1084,6 +1088,7 @@ static void test_cli(const char *exe)
         CHECK(rc != 0 && rc < 128, "%s: exit %d", bad[i].args, rc);
         CHECK(strstr(out, bad[i].expect) != NULL, "%s: message does not name %s: %s", bad[i].args,
               bad[i].expect, out);
+        CHECK(!strstr(out, "rays:"), "%s: rendered before refusing: %s", bad[i].args, out);
     }
     snprintf(cmd, sizeof cmd, "%s --help", exe);
     CHECK(check_run(cmd, out, sizeof out) == 0 && strstr(out, "examples"), "--help");

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* The source tree's scenes/, recorded at build time (apps/render/meson.build). */
@@ -166,17 +167,53 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
     return 1;
 }
 
+int sr_cli_output_path(const char *prog, const char *opt, const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    if (!path[0] || (slash && !slash[1]))
+        return sr_cli_bad(prog, opt, path, "expected a file name");
+    /* its folder: what comes before the last '/' ("/" for a file at the
+     * root, "." without one) */
+    char dir[PATH_MAX] = ".";
+    if (slash) {
+        size_t n = slash == path ? 1 : (size_t)(slash - path);
+        if (n >= sizeof dir)
+            return sr_cli_bad(prog, opt, path, "the path is too long");
+        memcpy(dir, path, n);
+        dir[n] = '\0';
+    }
+    char why[PATH_MAX + 64];
+    struct stat st;
+    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        snprintf(why, sizeof why, "the folder %s does not exist", dir);
+        return sr_cli_bad(prog, opt, path, why);
+    }
+    if (access(dir, W_OK | X_OK) != 0) {
+        snprintf(why, sizeof why, "the folder %s is not writable", dir);
+        return sr_cli_bad(prog, opt, path, why);
+    }
+    if (stat(path, &st) == 0 && (S_ISDIR(st.st_mode) || access(path, W_OK) != 0))
+        return sr_cli_bad(prog, opt, path,
+                          S_ISDIR(st.st_mode) ? "names a folder, not a file"
+                                              : "the file exists and is not writable");
+    return 0;
+}
+
 int sr_cli_image_path(const char *prog, const char *opt, const char *path)
 {
     const char *dot = strrchr(path, '.');
     if (!dot || (strcasecmp(dot, ".png") != 0 && strcasecmp(dot, ".exr") != 0 &&
                  strcasecmp(dot, ".hdr") != 0))
         return sr_cli_bad(prog, opt, path, "the file name must end in .png, .exr or .hdr");
-    return 0;
+    return sr_cli_output_path(prog, opt, path);
 }
 
 int sr_cli_common_finish(const char *prog, const sr_cli_common *c)
 {
+    /* where the results go is checked before any rendering, so that a long
+     * render does not end by failing to write them */
+    if (c->stats && sr_cli_output_path(prog, "--stats", c->stats))
+        return 2;
     if (c->no_image) {
         const char *writes = c->out_given    ? "--out"
                              : c->checkpoint ? "--checkpoint"

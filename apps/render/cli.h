@@ -51,8 +51,15 @@ int sr_cli_common_parse(const char *prog, int argc, char **argv, int *i, sr_cli_
  *  2 after printing a message. */
 int sr_cli_common_finish(const char *prog, const sr_cli_common *c);
 
+/** Checks, before any rendering, that a file can be written at `path`
+ *  (given to option `opt`): its folder exists and is writable, and the path
+ *  is not a folder or a read-only file. 0, or sr_cli_bad's exit status
+ *  after saying why (the file itself is not created). */
+int sr_cli_output_path(const char *prog, const char *opt, const char *path);
+
 /** Checks that an image path given to option `opt` ends in .png, .exr or
- *  .hdr: 0, or sr_cli_bad's exit status after saying why. */
+ *  .hdr and can be written (sr_cli_output_path): 0, or sr_cli_bad's exit
+ *  status after saying why. */
 int sr_cli_image_path(const char *prog, const char *opt, const char *path);
 
 /** Loads c->scene (a built-in name or a file; a default light is added to a
