@@ -184,8 +184,14 @@ int sr_cli_output_path(const char *prog, const char *opt, const char *path)
     }
     char why[PATH_MAX + 64];
     struct stat st;
-    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
-        snprintf(why, sizeof why, "the folder %s does not exist", dir);
+    int found = stat(dir, &st) == 0, e = errno;
+    if (!found || !S_ISDIR(st.st_mode)) {
+        if (found)
+            snprintf(why, sizeof why, "%s is not a folder", dir);
+        else if (e == ENOENT || e == ENOTDIR)
+            snprintf(why, sizeof why, "the folder %s does not exist", dir);
+        else
+            snprintf(why, sizeof why, "the folder %s: %s", dir, strerror(e));
         return sr_cli_bad(prog, opt, path, why);
     }
     if (access(dir, W_OK | X_OK) != 0) {
