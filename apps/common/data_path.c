@@ -12,6 +12,17 @@
 #define SR_BIN_TO_DATA "../share"
 #endif
 
+int sr_path_dir(const char *path, char *out, size_t size)
+{
+    const char *slash = strrchr(path, '/');
+    size_t n = !slash ? 1 : slash == path ? 1 : (size_t)(slash - path);
+    if (n >= size)
+        return -1;
+    memcpy(out, slash ? path : ".", n);
+    out[n] = '\0';
+    return 0;
+}
+
 int sr_exe_dir(char *out, size_t size)
 {
     if (!out || size < 2)

@@ -12,6 +12,11 @@
 extern "C" {
 #endif
 
+/** Writes the folder of `path` into `out`: what comes before its last '/'
+ *  ("/" for a file at the root, "." for a bare name). Returns 0, or -1 when
+ *  it does not fit in `size` bytes. */
+int sr_path_dir(const char *path, char *out, size_t size);
+
 /** Writes the folder of the running executable (from /proc/self/exe, with
  *  symbolic links resolved) into `out`. Returns 0, or -1 when it cannot be
  *  read (not Linux, no /proc) or does not fit in `size` bytes. */

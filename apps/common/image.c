@@ -4,6 +4,7 @@
  * linear RGB or RGBA floats. */
 #include "image.h"
 #include "app_error.h"
+#include "data_path.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -250,10 +251,8 @@ sluice_status sr_image_write(const sr_image *img, const char *path, char *err, s
         /* OpenImageIO's message names the temporary file and often not the
          * reason; a missing directory is the common one, so say so. */
         char parent[512];
-        snprintf(parent, sizeof parent, "%.*s", base > path ? (int)(base - path) : 1,
-                 base > path ? path : ".");
         struct stat sb;
-        if (stat(parent, &sb) != 0)
+        if (sr_path_dir(path, parent, sizeof parent) == 0 && stat(parent, &sb) != 0)
             sr_set_error(err, err_size, "cannot write '%s': directory '%s': %s", path, parent,
                          strerror(errno));
         else

@@ -172,16 +172,9 @@ int sr_cli_output_path(const char *prog, const char *opt, const char *path)
     const char *slash = strrchr(path, '/');
     if (!path[0] || (slash && !slash[1]))
         return sr_cli_bad(prog, opt, path, "expected a file name");
-    /* its folder: what comes before the last '/' ("/" for a file at the
-     * root, "." without one) */
-    char dir[PATH_MAX] = ".";
-    if (slash) {
-        size_t n = slash == path ? 1 : (size_t)(slash - path);
-        if (n >= sizeof dir)
-            return sr_cli_bad(prog, opt, path, "the path is too long");
-        memcpy(dir, path, n);
-        dir[n] = '\0';
-    }
+    char dir[PATH_MAX];
+    if (sr_path_dir(path, dir, sizeof dir) != 0)
+        return sr_cli_bad(prog, opt, path, "the path is too long");
     char why[PATH_MAX + 64];
     struct stat st;
     int found = stat(dir, &st) == 0, e = errno;

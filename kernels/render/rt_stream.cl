@@ -104,8 +104,8 @@ rt_traverse16(const rt_grid_args *g, const rt_packet *r, global const uint *cell
               global const uint *bits, int16 active, int16 *cx, int16 *cy, int16 *cz, uint16 *pos,
               uint16 *visited, int16 *found, int16 *done)
 {
-#ifndef SLUICE_AVX512_
     int16 stopped = (int16)0;
+#ifndef SLUICE_AVX512_
     for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
         if (!rt_any16(active))
             break;
@@ -131,7 +131,6 @@ rt_traverse16(const rt_grid_args *g, const rt_packet *r, global const uint *cell
      * read, need not wait for this bit's read: 3.5% faster on bunny-close
      * on Zen 4; with AVX2's 16 registers the three more vectors cost more
      * than that (bench/README.md) */
-    int16 stopped = (int16)0;
     int16 walking = active, fx = *cx, fy = *cy, fz = *cz;
     for (int k = 0; k < RT_UNROLL_STEPS; ++k) {
         if (!rt_any16(active))
