@@ -159,7 +159,7 @@ sluice_status pm_photons_create(rt_tracer *tracer, pm_photons **out, char *err, 
     p->area_prob = area_share(p->ds->scene);
     specular_sphere(p->ds->scene, p->spec);
     char opts[160];
-    snprintf(opts, sizeof opts, "%s%s%s%s",
+    snprintf(opts, sizeof opts, "-DRT_SURFACE_INLINE%s%s%s%s",
              p->ds->layout == SR_TRI_VERTICES ? " -DRT_WATERTIGHT" : "",
              mirror ? " -DRT_HAS_MIRROR" : "", glass ? " -DRT_HAS_GLASS" : "",
              ss->has_normals ? " -DRT_HAS_NORMALS" : "");

@@ -88,7 +88,7 @@ static sluice_status build_program(rt_renderer *r, const sr_scene_stats *ss)
              r->ds->layout == SR_TRI_VERTICES ? " -DRT_WATERTIGHT" : "",
              mirror ? " -DRT_HAS_MIRROR" : "", glass ? " -DRT_HAS_GLASS" : "",
              ss->has_normals ? " -DRT_HAS_NORMALS" : "",
-             r->direct ? " -DRT_DIRECT_FUSED -DRT_PACKETS_ONLY " : "",
+             r->direct ? " -DRT_DIRECT_FUSED -DRT_PACKETS_ONLY -DRT_SURFACE_INLINE " : "",
              r->direct ? rt_tracer_build_options(r->t) : "");
     char *k = r->skipped;
     size_t n = sizeof r->skipped;

@@ -19,9 +19,18 @@ typedef struct rt_surface {
     rt_material m;
 } rt_surface;
 
-inline rt_surface rt_surface_at(const rt_ray *ray, const rt_hit *h, global const float *tv,
-                                global const uint *indices, global const float *normals,
-                                global const uint *tri_mat, global const rt_material *mats)
+/* Inlined where the build asks (RT_SURFACE_INLINE: the fused mode's shading
+ * and direct light, the photons' bounces): called, it returns the surface
+ * through the stack, and the caller's first read of it stalled (perf
+ * annotate of rt_shade). The stream mode's shading, which samples the
+ * lights in the same loop, measured no faster inlined (bench/README.md). */
+#ifdef RT_SURFACE_INLINE
+__attribute__((always_inline))
+#endif
+inline rt_surface
+rt_surface_at(const rt_ray *ray, const rt_hit *h, global const float *tv,
+              global const uint *indices, global const float *normals, global const uint *tri_mat,
+              global const rt_material *mats)
 {
     rt_surface s;
     float3 o = (float3)(ray->ox, ray->oy, ray->oz), d = (float3)(ray->dx, ray->dy, ray->dz);
