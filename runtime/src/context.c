@@ -307,6 +307,10 @@ void sluice_context_destroy(sluice_context *ctx)
         }
         free(ctx->embedded);
     }
+    if (ctx->algorithms) {
+        ctx->algorithms->owned_by_context = false;
+        sluice_program_destroy(ctx->algorithms);
+    }
     sl_program_cache_clear(ctx);
     sluice_context_release_scratch(ctx);
     if (ctx->vars)

@@ -98,8 +98,10 @@ struct sluice_context {
      * sort_scratch_bytes (sl_sort_scratch). */
     cl_mem sort_scratch[2];
     size_t sort_scratch_bytes;
-    /* Embedded programs built on demand, one per embedded source. */
+    /* Embedded programs built on demand, one per embedded source, or on
+     * CPUs one for all the stream algorithms' sources (sl_embedded_program). */
     sluice_program **embedded;
+    sluice_program *algorithms;
     cl_kernel scan_kernel;
     /* Profiling. */
     int profile;
@@ -260,7 +262,8 @@ sluice_status sl_chain_reserve(sluice_context *ctx, size_t bytes);
 sluice_status sl_sort_scratch(sluice_context *ctx, size_t bytes, int two, cl_mem out[2]);
 
 /* The context-owned program built from embedded source `name` (e.g.
- * "scan.cl"), compiled on first use. */
+ * "scan.cl"), compiled on first use; on CPUs every stream algorithm's source
+ * shares one program (all of them, built together). */
 sluice_status sl_embedded_program(sluice_context *ctx, const char *name, sluice_program **out);
 /* Creates the context's kernel that scans ordered outputs' counts
  * (runtime.cl), if it has none yet: built when an ordered output is bound,

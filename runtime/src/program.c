@@ -332,8 +332,50 @@ const char *sluice_program_build_log(const sluice_program *p)
     return (p && p->log) ? p->log : "";
 }
 
+/* Is embedded source `name` one of the stream algorithms' (every embedded
+ * source but the prelude, sluice.cl, and the runtime's own, runtime.cl)? */
+static bool is_algorithm_source(const char *name)
+{
+    return strcmp(name, "sluice.cl") != 0 && strcmp(name, "runtime.cl") != 0;
+}
+
+/* The stream algorithms' sources as one program, for CPU devices. PoCL
+ * preprocesses a program's text with some 900 KB of OpenCL headers before it
+ * looks in its cache, a fixed cost of each build however warm the cache, and
+ * compiles a kernel only at its first launch, so one program costs less than
+ * the several a process asks for (bench/README.md has the figures). Each
+ * source keeps its file name and lines in messages (#line). */
+static sluice_status algorithms_program(sluice_context *ctx, sluice_program **out)
+{
+    if (!ctx->algorithms) {
+        size_t n = 1;
+        for (size_t i = 0; i < sl_embedded_source_count; ++i)
+            if (is_algorithm_source(sl_embedded_sources[i].name))
+                n += strlen(sl_embedded_sources[i].name) + strlen(sl_embedded_sources[i].text) + 16;
+        char *text = malloc(n), *t = text;
+        if (!text)
+            return sl_fail(ctx, SLUICE_ERROR_OUT_OF_MEMORY, "out of host memory");
+        for (size_t i = 0; i < sl_embedded_source_count; ++i)
+            if (is_algorithm_source(sl_embedded_sources[i].name))
+                t += sprintf(t, "#line 1 \"%s\"\n%s\n", sl_embedded_sources[i].name,
+                             sl_embedded_sources[i].text);
+        sluice_program *p;
+        sluice_status st =
+            sluice_program_create_source(ctx, "the stream algorithms", text, NULL, &p);
+        free(text);
+        if (st != SLUICE_OK)
+            return st;
+        p->owned_by_context = true;
+        ctx->algorithms = p;
+    }
+    *out = ctx->algorithms;
+    return sluice_program_build(*out);
+}
+
 sluice_status sl_embedded_program(sluice_context *ctx, const char *name, sluice_program **out)
 {
+    if (ctx->info.is_cpu && is_algorithm_source(name) && sl_embedded_find(name))
+        return algorithms_program(ctx, out);
     for (size_t i = 0; i < sl_embedded_source_count; ++i) {
         if (strcmp(sl_embedded_sources[i].name, name) != 0)
             continue;
