@@ -1337,6 +1337,8 @@ SLUICE_INLINE_ void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf
     }
 #endif
     s->pos[slot] = p + k;
+    if (!k)
+        return; /* nothing to write: most blocks of a rarely chosen output */
 #ifdef SLUICE_AVX512_
     /* The kernels run on the host CPU, where every address space is plain
      * memory: the builtins take a generic pointer, so the global pointer goes
@@ -1350,7 +1352,13 @@ SLUICE_INLINE_ void sluice_emit16_(sluice_state_ *s, uint slot, global uint *buf
         return;
     }
     if (p + k <= lim) {
-        __builtin_ia32_compressstoresi512_mask((int16 *)(size_t)(buf + p), as_int16(*x), m);
+        /* packed in a register, then k lanes stored under a mask: the
+         * compress instruction's own store form is far slower on AMD's
+         * Zen 4 (measured, bench/README.md) */
+        __builtin_ia32_storedqusi512_mask(
+            (int *)(size_t)(buf + p),
+            __builtin_ia32_compresssi512_mask(as_int16(*x), as_int16(*x), m),
+            (ushort)((1u << k) - 1u));
         return;
     }
 #elif defined(SLUICE_AVX2_)
