@@ -5,8 +5,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-sluice_status sr_program_create(sluice_context *ctx, const char *const *names, size_t count,
-                                const char *options, sluice_program **out)
+/* The program named `name` (build errors say "building NAME failed"). */
+static sluice_status program_create(sluice_context *ctx, const char *name, const char *const *names,
+                                    size_t count, const char *options, sluice_program **out)
 {
     if (!ctx || !names || !count || !out)
         return SLUICE_ERROR_INVALID_ARGUMENT;
@@ -23,7 +24,29 @@ sluice_status sr_program_create(sluice_context *ctx, const char *const *names, s
         return SLUICE_ERROR_OUT_OF_MEMORY;
     for (size_t i = 0; i < count; ++i)
         p += sprintf(p, "#line 1 \"%s\"\n%s\n", names[i], sr_kernel_text(names[i]));
-    sluice_status st = sluice_program_create_source(ctx, names[count - 1], src, options, out);
+    sluice_status st = sluice_program_create_source(ctx, name, src, options, out);
     free(src);
     return st;
+}
+
+sluice_status sr_program_create(sluice_context *ctx, const char *const *names, size_t count,
+                                const char *options, sluice_program **out)
+{
+    if (!names || !count)
+        return SLUICE_ERROR_INVALID_ARGUMENT;
+    return program_create(ctx, names[count - 1], names, count, options, out);
+}
+
+sluice_status sr_shared_program_create(sluice_context *ctx, const char *options,
+                                       sluice_program **out)
+{
+    /* The headers first; tri_box.h, whose FP_CONTRACT OFF holds to the end
+     * of the text, with grid.cl last: every source keeps the contraction
+     * it had in a program of its own (pg_types.h and triangle.cl turn it
+     * off before the others' code, as they did there). */
+    static const char *const names[] = {"rt_types.h", "pg_types.h", "pm_types.h",   "triangle.cl",
+                                        "film.cl",    "surface.cl", "pm_render.cl", "point_grid.cl",
+                                        "pm_knn.cl",  "tri_box.h",  "grid.cl"};
+    return program_create(ctx, "the shared render kernels", names, sizeof names / sizeof *names,
+                          options, out);
 }

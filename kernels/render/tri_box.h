@@ -28,7 +28,9 @@
 
 #ifdef __OPENCL_VERSION__
 #pragma OPENCL FP_CONTRACT OFF
+#ifndef SLUICE_RT_TYPES_H /* the renderers' shared program has it already */
 typedef uint rt_u32;
+#endif
 #define RT_ABS(x) fabs(x)
 #define RT_FLOOR(x) floor(x)
 #else
@@ -81,13 +83,13 @@ typedef struct rt_tri {
     int valid;
 } rt_tri;
 
-RT_FN float rt_min3(float a, float b, float c)
+RT_FN float rt_tri_min3(float a, float b, float c)
 {
     float m = a < b ? a : b;
     return m < c ? m : c;
 }
 
-RT_FN float rt_max3(float a, float b, float c)
+RT_FN float rt_tri_max3(float a, float b, float c)
 {
     float m = a > b ? a : b;
     return m > c ? m : c;
@@ -143,12 +145,12 @@ RT_FN void rt_tri_setup(rt_tri *t, const float *p0, const float *p1, const float
     t->nax = RT_ABS(t->e0y * t->e1z) + RT_ABS(t->e0z * t->e1y);
     t->nay = RT_ABS(t->e0z * t->e1x) + RT_ABS(t->e0x * t->e1z);
     t->naz = RT_ABS(t->e0x * t->e1y) + RT_ABS(t->e0y * t->e1x);
-    t->bmin[0] = rt_min3(t->p0x, t->p1x, t->p2x);
-    t->bmin[1] = rt_min3(t->p0y, t->p1y, t->p2y);
-    t->bmin[2] = rt_min3(t->p0z, t->p1z, t->p2z);
-    t->bmax[0] = rt_max3(t->p0x, t->p1x, t->p2x);
-    t->bmax[1] = rt_max3(t->p0y, t->p1y, t->p2y);
-    t->bmax[2] = rt_max3(t->p0z, t->p1z, t->p2z);
+    t->bmin[0] = rt_tri_min3(t->p0x, t->p1x, t->p2x);
+    t->bmin[1] = rt_tri_min3(t->p0y, t->p1y, t->p2y);
+    t->bmin[2] = rt_tri_min3(t->p0z, t->p1z, t->p2z);
+    t->bmax[0] = rt_tri_max3(t->p0x, t->p1x, t->p2x);
+    t->bmax[1] = rt_tri_max3(t->p0y, t->p1y, t->p2y);
+    t->bmax[2] = rt_tri_max3(t->p0z, t->p1z, t->p2z);
 }
 
 /** The relative rounding bound of the projections below: 2^-21, eight
@@ -160,7 +162,7 @@ RT_FN void rt_tri_setup(rt_tri *t, const float *p0, const float *p1, const float
  * to [-r, r]; 1 when they are disjoint. */
 RT_FN int rt_separated(float a, float b, float c, float r)
 {
-    return rt_min3(a, b, c) > r || rt_max3(a, b, c) < -r;
+    return rt_tri_min3(a, b, c) > r || rt_tri_max3(a, b, c) < -r;
 }
 
 /* The three axes (unit x) x e = (0, -ez, ey), (unit y) x e = (ez, 0, -ex)
@@ -216,9 +218,9 @@ RT_FN int rt_tri_box_overlap(const rt_tri *t, const float *c, const float *h)
         rt_separated(v0z, v1z, v2z, hz))
         return 0;
     /* Largest corner distance per axis, for the rounding bounds. */
-    const float mx = rt_max3(RT_ABS(v0x), RT_ABS(v1x), RT_ABS(v2x));
-    const float my = rt_max3(RT_ABS(v0y), RT_ABS(v1y), RT_ABS(v2y));
-    const float mz = rt_max3(RT_ABS(v0z), RT_ABS(v1z), RT_ABS(v2z));
+    const float mx = rt_tri_max3(RT_ABS(v0x), RT_ABS(v1x), RT_ABS(v2x));
+    const float my = rt_tri_max3(RT_ABS(v0y), RT_ABS(v1y), RT_ABS(v2y));
+    const float mz = rt_tri_max3(RT_ABS(v0z), RT_ABS(v1z), RT_ABS(v2z));
     /* Triangle normal: the box projects onto n as [-r, r], the triangle as
      * the single value n . v0. The error of n's components is bounded by
      * na's (the sizes of their terms), which also bound |n|. */

@@ -332,11 +332,14 @@ const char *sluice_program_build_log(const sluice_program *p)
     return (p && p->log) ? p->log : "";
 }
 
-/* Is embedded source `name` one of the stream algorithms' (every embedded
- * source but the prelude, sluice.cl, and the runtime's own, runtime.cl)? */
+/* Is embedded source `name` one of the program of the stream algorithms
+ * (every embedded source but the prelude, sluice.cl)? The runtime's own
+ * kernels (runtime.cl: the ordered outputs' scan, mapped lengths) go with
+ * them: a process that binds an output almost always runs an algorithm too,
+ * and one build costs less than two. */
 static bool is_algorithm_source(const char *name)
 {
-    return strcmp(name, "sluice.cl") != 0 && strcmp(name, "runtime.cl") != 0;
+    return strcmp(name, "sluice.cl") != 0;
 }
 
 /* The stream algorithms' sources as one program, for CPU devices. PoCL

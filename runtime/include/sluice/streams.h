@@ -51,8 +51,9 @@ typedef enum sluice_algorithm {
  *  calls find them built. For setup code: a renderer's first frame, or a
  *  benchmark's first run, then does not pay for the builds (tens of
  *  milliseconds each from PoCL's kernel cache, seconds cold). On CPU
- *  devices the algorithms share one program, so preparing any of them
- *  builds them all at once. Optional: without it each algorithm builds its
+ *  devices the algorithms share one program, with the runtime's own kernels
+ *  (the ordered outputs' scan), so preparing any of them builds them all at
+ *  once. Optional: without it each algorithm builds its
  *  kernels on first use. Unknown bits are SLUICE_ERROR_INVALID_ARGUMENT. */
 sluice_status sluice_streams_prepare(sluice_context *ctx, unsigned algorithms);
 
