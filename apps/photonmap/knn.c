@@ -187,7 +187,9 @@ sluice_status pm_knn_create(sluice_context *ctx, pm_knn **out)
     if (!knn)
         return SLUICE_ERROR_OUT_OF_MEMORY;
     knn->ctx = ctx;
-    sluice_status st = sr_shared_program_create(ctx, NULL, &knn->prog);
+    sluice_status st = sr_shared_program_create(
+        ctx, (const char *[]){"rt_types.h", "pg_types.h", "pm_types.h", "pm_knn.cl"}, 4, NULL,
+        &knn->prog);
     /* the scans of the cell counts and the sort of the queries by cell,
      * built now rather than in the first estimate */
     if (st == SLUICE_OK)

@@ -233,7 +233,10 @@ sluice_status pm_renderer_create(sluice_context *ctx, const sr_scene *scene, con
         return st;
     }
     const sr_device_scene *ds = rt_tracer_scene(r->tracer);
-    st = sr_shared_program_create(ctx, ds->layout == SR_TRI_VERTICES ? "-DRT_WATERTIGHT" : NULL,
+    static const char *const names[] = {"rt_types.h", "pm_types.h", "triangle.cl",
+                                        "film.cl",    "surface.cl", "pm_render.cl"};
+    st = sr_shared_program_create(ctx, names, sizeof names / sizeof *names,
+                                  ds->layout == SR_TRI_VERTICES ? "-DRT_WATERTIGHT" : NULL,
                                   &r->program);
     if (st == SLUICE_OK)
         st = sluice_program_build(r->program);

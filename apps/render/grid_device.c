@@ -178,7 +178,7 @@ sluice_status rt_grid_build_device_limit(sluice_context *ctx, const rt_grid_desc
     build b = {0};
     uint64_t total = 0;
     const char *step = "creating the kernels";
-    st = sr_shared_program_create(ctx, NULL, &b.prog);
+    st = sr_shared_program_create(ctx, (const char *[]){"tri_box.h", "grid.cl"}, 2, NULL, &b.prog);
     if (st == SLUICE_OK)
         st = sluice_kernel_create(b.prog, "rt_grid_count", &b.k_count);
     if (st == SLUICE_OK)

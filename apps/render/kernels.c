@@ -37,16 +37,19 @@ sluice_status sr_program_create(sluice_context *ctx, const char *const *names, s
     return program_create(ctx, names[count - 1], names, count, options, out);
 }
 
-sluice_status sr_shared_program_create(sluice_context *ctx, const char *options,
-                                       sluice_program **out)
+sluice_status sr_shared_program_create(sluice_context *ctx, const char *const *names, size_t count,
+                                       const char *options, sluice_program **out)
 {
+    sluice_device_info info;
+    if (!ctx || sluice_context_device(ctx, &info) != SLUICE_OK || !info.is_cpu)
+        return sr_program_create(ctx, names, count, options, out);
     /* The headers first; tri_box.h, whose FP_CONTRACT OFF holds to the end
      * of the text, with grid.cl last: every source keeps the contraction
      * it had in a program of its own (pg_types.h and triangle.cl turn it
      * off before the others' code, as they did there). */
-    static const char *const names[] = {"rt_types.h", "pg_types.h", "pm_types.h",   "triangle.cl",
-                                        "film.cl",    "surface.cl", "pm_render.cl", "point_grid.cl",
-                                        "pm_knn.cl",  "tri_box.h",  "grid.cl"};
-    return program_create(ctx, "the shared render kernels", names, sizeof names / sizeof *names,
+    static const char *const shared[] = {
+        "rt_types.h",   "pg_types.h",    "pm_types.h", "triangle.cl", "film.cl", "surface.cl",
+        "pm_render.cl", "point_grid.cl", "pm_knn.cl",  "tri_box.h",   "grid.cl"};
+    return program_create(ctx, "the shared render kernels", shared, sizeof shared / sizeof *shared,
                           options, out);
 }

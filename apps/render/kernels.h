@@ -23,18 +23,21 @@ sluice_status sr_program_create(sluice_context *ctx, const char *const *names, s
                                 const char *options, sluice_program **out);
 
 /**
- * Creates the program the renderers' modules without build options of
- * their own share (the device grid build, the point grid, the kNN search,
- * the photon mapper's gather): their sources as one text, the same for
- * every module. PoCL runs its front end over its OpenCL headers for every
- * program it builds, warm cache or not (about 25 ms a program), so one
- * program for four modules costs one such run; and since the text is the
- * same, the context's kept programs (sluice_program_build) give every
- * module after the first the program already built. `options` (may be
- * NULL) are the scene's layout defines where a module needs them
- * (-DRT_WATERTIGHT); modules that do not pass NULL.
+ * Creates the program of a module without build options of its own (the
+ * device grid build, the point grid, the kNN search, the photon mapper's
+ * gather): on CPU devices the program they all share, their sources as one
+ * text, the same for every module; elsewhere the module's own sources
+ * (`names`, `count`, as sr_program_create takes them). PoCL runs its front
+ * end over its OpenCL headers for every program it builds, warm cache or not
+ * (about 25 ms a program), so one program for four modules costs one such
+ * run, and since the text is the same, the context's kept programs
+ * (sluice_program_build) give every module after the first the program
+ * already built. GPU drivers compile every kernel of a program when they
+ * build it, so there each module keeps its own. `options` (may be NULL) are
+ * the scene's layout defines where a module needs them (-DRT_WATERTIGHT);
+ * modules that do not pass NULL.
  */
-sluice_status sr_shared_program_create(sluice_context *ctx, const char *options,
-                                       sluice_program **out);
+sluice_status sr_shared_program_create(sluice_context *ctx, const char *const *names, size_t count,
+                                       const char *options, sluice_program **out);
 
 #endif /* SLUICE_RT_KERNELS_H */

@@ -98,7 +98,8 @@ sluice_status sr_point_grid_create(sluice_context *ctx, sr_point_grid **out)
     if (!g)
         return SLUICE_ERROR_OUT_OF_MEMORY;
     g->ctx = ctx;
-    sluice_status st = sr_shared_program_create(ctx, NULL, &g->prog);
+    sluice_status st = sr_shared_program_create(
+        ctx, (const char *[]){"rt_types.h", "pg_types.h", "point_grid.cl"}, 3, NULL, &g->prog);
     struct {
         sluice_kernel **k;
         const char *name;
