@@ -542,7 +542,7 @@ sluice_status pm_renderer_prepare(pm_renderer *r, char *err, size_t err_size)
 static sluice_status gather(void *user, sluice_stream *points, size_t n)
 {
     pm_renderer *r = user;
-    if (r->map_count == 0 || n == 0) /* a wave with no diffuse hits (no mirror or glass) */
+    if (r->map_count == 0 || n == 0) /* a sample with no diffuse hits */
         return SLUICE_OK;
     /* the tracing queued before the hook is the tracing phase's: wait for it
      * so that the estimate's clock does not count it */

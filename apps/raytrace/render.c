@@ -37,7 +37,7 @@ struct rt_renderer {
     sr_film *film;
     sr_adaptive *sampling;
     sluice_stream *rays, *next, *hits, *shadow, *shadow_hits;
-    sluice_stream *gather; /* rt_gather (one record when not gathering) */
+    sluice_stream *gather; /* rt_gather (one record when not gathering): a sample's */
     char skipped[384];
     size_t per_shadow, per_secondary;
     rt_render_stats stats;
@@ -302,10 +302,14 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
         st = sluice_kernel_set_output(k, 4, 1, r->next, SLUICE_UNORDERED);
     if (st == SLUICE_OK)
         st = bind_scene(r, k, 5);
+    /* gather points accumulate over the sample's slices (rt_renderer_sample
+     * hands them over at its end): room for one more a ray (the length is
+     * the slices' before, whose work the last wave's read has waited for) */
+    size_t have = 0;
     if (st == SLUICE_OK && r->opt.gather)
-        st = ensure(r->gather, count);
-    if (st == SLUICE_OK)
-        st = sluice_stream_clear(r->gather);
+        st = sluice_stream_length(r->gather, &have);
+    if (st == SLUICE_OK && r->opt.gather)
+        st = ensure(r->gather, have + count);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_output(k, 15, 2, r->gather, SLUICE_UNORDERED);
     if (st == SLUICE_OK)
@@ -326,11 +330,6 @@ static sluice_status shade_slice(rt_renderer *r, size_t base, size_t count)
         if (st == SLUICE_OK)
             st = sluice_kernel_launch(r->k_resolve);
     }
-    size_t ng = 0;
-    if (st == SLUICE_OK && r->opt.gather)
-        st = sluice_stream_length(r->gather, &ng);
-    if (st == SLUICE_OK && ng)
-        st = r->opt.gather(r->opt.gather_user, r->gather, ng);
     uint32_t c[SC_COUNT];
     if (st == SLUICE_OK)
         st = sluice_counters_read_restart(r->counters, c);
@@ -361,6 +360,8 @@ sluice_status rt_renderer_sample(rt_renderer *r)
     r->frame.jitter = s > 0;
     r->frame.film_half = (s & 1u) ? (rt_u32)(w * h) : 0u;
     sluice_status st = sluice_stream_clear(r->rays);
+    if (st == SLUICE_OK)
+        st = sluice_stream_clear(r->gather);
     if (st == SLUICE_OK)
         st = sluice_kernel_set_output(r->k_raygen, 0, 0, r->rays, SLUICE_ORDERED);
     if (st == SLUICE_OK)
@@ -394,6 +395,14 @@ sluice_status rt_renderer_sample(rt_renderer *r)
         }
         n = nn;
     }
+    /* the gather points of every wave at once: one radiance estimate a
+     * sample, not one a wave (a launch chain each), before the sampling
+     * check reads the film */
+    size_t ng = 0;
+    if (st == SLUICE_OK && r->opt.gather)
+        st = sluice_stream_length(r->gather, &ng);
+    if (st == SLUICE_OK && ng)
+        st = r->opt.gather(r->opt.gather_user, r->gather, ng);
     if (st == SLUICE_OK)
         st = rt_tracer_collect_maxima(t);
     if (st == SLUICE_OK)

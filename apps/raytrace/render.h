@@ -29,11 +29,12 @@ typedef struct rt_render_options {
     unsigned max_depth;     /**< bounces (whitted, path) */
     unsigned light_samples; /**< shadow rays per area light and hit */
     uint32_t seed;
-    /** Whitted mode only, may be NULL: called after each shading slice with
-     *  the gather points (rt_gather records, device stream, `n` of them) of
-     *  the diffuse and glossy hits, so that a caller adds what the shading
-     *  does not know (the photon mapper's radiance estimate) to the film
-     *  before the stream is reused. Returning an error stops the sample. */
+    /** Whitted mode only, may be NULL: called once a sample, after its last
+     *  wave, with the gather points (rt_gather records, device stream, `n` of
+     *  them) of the diffuse and glossy hits of all its waves, so that a
+     *  caller adds what the shading does not know (the photon mapper's
+     *  radiance estimate) to the film before the sampling check reads it and
+     *  the stream is reused. Returning an error stops the sample. */
     sluice_status (*gather)(void *user, sluice_stream *points, size_t n);
     void *gather_user;
     /** Adaptive sampling and the target error (adaptive.h); all zero:
