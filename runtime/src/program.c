@@ -332,7 +332,7 @@ const char *sluice_program_build_log(const sluice_program *p)
     return (p && p->log) ? p->log : "";
 }
 
-/* Is embedded source `name` one of the program of the stream algorithms
+/* Does embedded source `name` go into the stream algorithms' program
  * (every embedded source but the prelude, sluice.cl)? The runtime's own
  * kernels (runtime.cl: the ordered outputs' scan, mapped lengths) go with
  * them: a process that binds an output almost always runs an algorithm too,

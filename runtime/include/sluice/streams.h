@@ -53,8 +53,8 @@ typedef enum sluice_algorithm {
  *  milliseconds each from PoCL's kernel cache, seconds cold). On CPU
  *  devices the algorithms share one program, with the runtime's own kernels
  *  (the ordered outputs' scan), so preparing any of them builds them all at
- *  once. Optional: without it each algorithm builds its
- *  kernels on first use. Unknown bits are SLUICE_ERROR_INVALID_ARGUMENT. */
+ *  once. Optional: without it each algorithm builds its kernels on first
+ *  use. Unknown bits are SLUICE_ERROR_INVALID_ARGUMENT. */
 sluice_status sluice_streams_prepare(sluice_context *ctx, unsigned algorithms);
 
 /** Prefix sum of a scalar stream into `out` (capacity >= input length; may
