@@ -130,6 +130,7 @@ typedef struct sluice_launch_ {
     uint interleave;   /* 1: SLUICE_FOR_EACH interleaves its records within a work-group */
     uint spread;       /* work-group g takes the chunks of group g * spread mod groups */
     uint epoch;        /* mode 3: this launch's tag in the chain's flags */
+    uint chain_flags;  /* mode 3: words of the chain's flag region (at least stride) */
     uint out_var[SLUICE_MAX_OUTPUTS]; /* output lengths in the pool */
     uint out_cap[SLUICE_MAX_OUTPUTS]; /* output capacities (records) */
     uint map_var[SLUICE_MAX_OUTPUTS]; /* the lengths of those mapped outputs */
@@ -382,13 +383,20 @@ SLUICE_INLINE_ void sluice_range_places_(sluice_state_ *s)
  * The scratch buffer is the context's chain buffer (the host's
  * sl_chain_reserve; zeroed when made): word 0 the ticket counter, which the
  * work-item drawing the launch's last ticket sets back to 0; then a flag per
- * chunk, stride words; then, per ordered output up to the highest (rows), a
- * row of each chunk's count (published first, so that the next chunk need
- * not wait for this one's look-back) and a row of each chunk's inclusive end
- * (its place plus its count). A flag is the launch's epoch (the host's,
- * different in every mode-3 launch, so flags of earlier launches never
- * count) shifted by 2, or-ed with what is published: 1 the count, 2 the end.
- * Values are written before their flag and read after it. */
+ * chunk, in a region of chain_flags words (at least stride) that keeps its
+ * place as long as the buffer does; then, per ordered output up to the
+ * highest (rows), a row of each chunk's count (published first, so that the
+ * next chunk need not wait for this one's look-back) and a row of each
+ * chunk's inclusive end (its place plus its count), stride words each. A
+ * flag is the launch's epoch (the host's, different in every mode-3 launch,
+ * so flags of earlier launches never count) shifted by 2, or-ed with what is
+ * published: 1 the count, 2 the end. Values are written before their flag
+ * and read after it. The flags' region is not placed by the launch's own
+ * stride: with it, a launch of more chunks than the one before found that
+ * one's counts and ends where its flags are, and a count that equalled its
+ * tag read as a chunk's flag, so that a chunk looking back before its
+ * neighbour had published took a stale count (test_runtime's
+ * test_chain_strides; bench/README.md). */
 #define SLUICE_CHAIN_COUNT_ 1u
 #define SLUICE_CHAIN_END_ 2u
 
@@ -420,7 +428,7 @@ SLUICE_INLINE_ void sluice_chain_place_(global uint *chain, global uint *vars,
     uint st = L->stride, rows = 32u - clz(L->ordered_mask);
     uint tag = L->epoch << 2;
     volatile global uint *flag = chain + 1u;
-    volatile global uint *count = flag + st, *end = count + rows * st;
+    volatile global uint *count = flag + L->chain_flags, *end = count + rows * st;
     uint acc[SLUICE_MAX_OUTPUTS], dead = 0u;
     SLUICE_EACH_OUTPUT_ (k) {
         acc[k] = 0u;

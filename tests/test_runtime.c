@@ -26,6 +26,22 @@ static const char *kernels_src =
     "        SLUICE_COUNT(1, x & 1u);\n"
     "    }\n"
     "}\n"
+    /* split3 whose even chunks of 16 records take `spin` steps a record
+     * (test_chain_strides) */
+    "__kernel void split3_slow(SLUICE_PARAMS, global const uint *in, global uint *a,\n"
+    "                          global uint *b, global uint *c, uint spin)\n"
+    "{\n"
+    "    SLUICE_FOR_EACH(i) {\n"
+    "        uint x = in[i], h = x;\n"
+    "        for (uint s = (i / 16u) % 2u ? spin : 0u; s < spin; ++s)\n"
+    "            h = h * 1664525u + 1013904223u;\n"
+    "        if (h == 0xffffffffu && x == 0xfffffffeu)\n"
+    "            x = 0u;\n"
+    "        SLUICE_EMIT_IF(0, a, x, x % 3u == 0u);\n"
+    "        SLUICE_EMIT_IF(1, b, x, x % 3u == 1u);\n"
+    "        SLUICE_EMIT_IF(2, c, x, x % 3u == 2u);\n"
+    "    }\n"
+    "}\n"
     "__kernel void group_of(SLUICE_PARAMS, global const uint *in, global uint *out)\n"
     "{\n"
     "    SLUICE_FOR_EACH(i)\n"
@@ -1303,6 +1319,77 @@ static void test_chunk_env(void)
     unsetenv("SLUICE_CHUNK");
 }
 
+/* Whether split3 (ordered outputs) over in[0 .. n) gives the plain C
+ * split's three outputs. */
+static int split3_matches(sluice_context *ctx, sluice_program *p, const uint32_t *in, size_t n,
+                          uint32_t spin)
+{
+    sluice_kernel *k = NULL;
+    sluice_stream *s_in = NULL, *s_out[3] = {NULL, NULL, NULL};
+    uint32_t *ref = malloc(3 * (n + 1) * 4), *got = malloc((n + 1) * 4);
+    size_t rn[3] = {0, 0, 0};
+    int ok = ref && got;
+    for (size_t i = 0; ok && i < n; ++i)
+        ref[(in[i] % 3u) * (n + 1) + rn[in[i] % 3u]++] = in[i];
+    CHECK_OK(ctx, sluice_kernel_create(p, "split3_slow", &k));
+    CHECK_OK(ctx, sluice_kernel_set_arg(k, 4, sizeof spin, &spin));
+    CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &s_in));
+    CHECK_OK(ctx, sluice_stream_upload(s_in, in, n));
+    CHECK_OK(ctx, sluice_kernel_set_input(k, 0, s_in));
+    for (unsigned j = 0; j < 3; ++j) {
+        CHECK_OK(ctx, sluice_stream_create(ctx, 4, n, &s_out[j]));
+        CHECK_OK(ctx, sluice_kernel_set_output(k, 1 + j, j, s_out[j], SLUICE_ORDERED));
+    }
+    CHECK_OK(ctx, sluice_kernel_launch(k));
+    for (int j = 0; ok && j < 3; ++j) {
+        size_t len = 0;
+        ok = sluice_stream_download(s_out[j], got, n, &len) == SLUICE_OK && len == rn[j] &&
+             memcmp(got, ref + (size_t)j * (n + 1), len * 4) == 0;
+    }
+    for (int j = 0; j < 3; ++j)
+        sluice_stream_destroy(s_out[j]);
+    sluice_stream_destroy(s_in);
+    sluice_kernel_destroy(k);
+    free(ref);
+    free(got);
+    return ok;
+}
+
+/* Ordered outputs placed in one launch (the chain, kernels/sluice.cl) keep
+ * their flags apart from the counts of earlier launches whatever a launch's
+ * number of chunks. In a fresh context with chunks of 16 records: a launch
+ * of 8 chunks whose counts are 8 each, the next launch's tag (its epoch, 2,
+ * times 4), then a launch of 64 chunks whose even chunks are slow, so that
+ * the odd ones look back before their neighbours publish. Where the flags
+ * took a launch's own stride, the second launch's flags lay on the first
+ * one's counts and read as published: every such launch placed its records
+ * wrongly (40 of the 80 launches). */
+static void test_chain_strides(void)
+{
+    sluice_context_options o;
+    memset(&o, 0, sizeof o);
+    o.chunk = 16;
+    uint32_t a[128], b[1024], seed = 99u;
+    for (size_t i = 0; i < 128; ++i) /* per chunk: 8 records to output 0, 8 to output 1 */
+        a[i] = (uint32_t)(3 * i + (i % 16 >= 8));
+    int bad = 0;
+    for (int rep = 0; rep < 40; ++rep) {
+        for (size_t i = 0; i < 1024; ++i)
+            b[i] = check_rand(&seed);
+        sluice_context *c = NULL;
+        char msg[256] = "";
+        CHECK(sluice_context_create(&o, &c, msg, sizeof msg) == SLUICE_OK && c, "context: %s", msg);
+        if (!c)
+            return;
+        sluice_program *p = program(c);
+        bad += !split3_matches(c, p, a, 128, 0u);
+        bad += !split3_matches(c, p, b, 1024, 20000u);
+        sluice_program_destroy(p);
+        sluice_context_destroy(c);
+    }
+    CHECK(bad == 0, "ordered outputs after a launch of fewer chunks: %d of 80 launches wrong", bad);
+}
+
 /* SLUICE_LAYOUT and the layout option: a bad value is refused with a
  * message that names it; the GPU layout (interleaved records, a work-group
  * scanning the chunk counts) gives the same outputs on this device, for
@@ -1384,6 +1471,7 @@ int main(void)
     sluice_context_destroy(ctx);
     test_profile();
     test_chunk_env();
+    test_chain_strides();
     test_layout();
     return check_summary();
 }

@@ -371,6 +371,7 @@ void sluice_context_release_scratch(sluice_context *ctx)
     }
     ctx->scratch_bytes = 0;
     ctx->chain_bytes = 0;
+    ctx->chain_flags = 0;
     ctx->sort_scratch_bytes = 0;
 }
 
@@ -467,9 +468,23 @@ sluice_status sl_scratch_reserve(sluice_context *ctx, size_t bytes)
                        "scratch for ordered outputs");
 }
 
-sluice_status sl_chain_reserve(sluice_context *ctx, size_t bytes)
+sluice_status sl_chain_reserve(sluice_context *ctx, size_t flags, size_t values)
 {
-    return grow_buffer(ctx, &ctx->chain, &ctx->chain_bytes, bytes, 1, "the ordered outputs' chain");
+    if (flags > ctx->chain_flags) {
+        /* a wider flag region moves the values: a buffer anew, zeroed (an
+         * in-order queue: work queued before keeps the old one alive) */
+        if (ctx->chain)
+            clReleaseMemObject(ctx->chain);
+        ctx->chain = NULL;
+        ctx->chain_bytes = 0;
+        ctx->chain_flags = flags;
+    }
+    sluice_status st = grow_buffer(ctx, &ctx->chain, &ctx->chain_bytes,
+                                   (1 + ctx->chain_flags + values) * sizeof(cl_uint), 1,
+                                   "the ordered outputs' chain");
+    if (st != SLUICE_OK && !ctx->chain)
+        ctx->chain_flags = 0;
+    return st;
 }
 
 sluice_status sl_sort_scratch(sluice_context *ctx, size_t bytes, int two, cl_mem out[2])

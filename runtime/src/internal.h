@@ -37,6 +37,7 @@ const char *sl_embedded_find(const char *name);
 typedef struct sl_launch {
     cl_uint n_fixed, in_var, chunk, mode, first_pass, ordered_mask, out_mask;
     cl_uint counter_var, n_counters, prof_var, stride, in_cap, n_map, interleave, spread, epoch;
+    cl_uint chain_flags;
     cl_uint out_var[SLUICE_MAX_OUTPUTS];
     cl_uint out_cap[SLUICE_MAX_OUTPUTS];
     cl_uint map_var[SLUICE_MAX_OUTPUTS];
@@ -94,6 +95,7 @@ struct sluice_context {
     cl_mem chain;
     size_t chain_bytes;
     cl_uint chain_epoch;
+    size_t chain_flags; /* words of its flag region, fixed while the buffer lives */
     /* The radix sort's ping-pong buffers for keys and values, each of
      * sort_scratch_bytes (sl_sort_scratch). */
     cl_mem sort_scratch[2];
@@ -255,8 +257,12 @@ sluice_status sl_vars_fill(sluice_context *ctx, cl_uint first, size_t count, cl_
 
 /* Makes sure the ordered-output scratch holds at least `bytes`. */
 sluice_status sl_scratch_reserve(sluice_context *ctx, size_t bytes);
-/* Makes sure the chain buffer holds at least `bytes`; a new one is zeroed. */
-sluice_status sl_chain_reserve(sluice_context *ctx, size_t bytes);
+/* Makes sure the chain buffer (kernels/sluice.cl, the chain) has a flag
+ * region of at least `flags` words (ctx->chain_flags) and `values` words
+ * after it; a new one is zeroed. The flag region keeps its size as long as
+ * the buffer lives: a launch of more chunks than it holds gets a new buffer,
+ * so that no launch's flags lie where an earlier one wrote values. */
+sluice_status sl_chain_reserve(sluice_context *ctx, size_t flags, size_t values);
 /* The sort's two scratch buffers of at least `bytes` each (the second only
  * when `two`), grown as needed and kept by the context. */
 sluice_status sl_sort_scratch(sluice_context *ctx, size_t bytes, int two, cl_mem out[2]);

@@ -496,9 +496,10 @@ static sluice_status launch(sluice_kernel *k, int has_count, size_t count)
         if ((L.ordered_mask >> s) & 1u)
             rows = s + 1;
     if (queued && chain) {
-        st = sl_chain_reserve(ctx, (1 + (1 + 2 * rows) * L.stride) * sizeof(cl_uint));
+        st = sl_chain_reserve(ctx, L.stride, 2 * rows * L.stride);
         if (st != SLUICE_OK)
             return st;
+        L.chain_flags = (cl_uint)ctx->chain_flags;
         ctx->chain_epoch = ctx->chain_epoch + 1 < (1u << 30) ? ctx->chain_epoch + 1 : 1;
         L.epoch = ctx->chain_epoch;
         L.mode = 3;
